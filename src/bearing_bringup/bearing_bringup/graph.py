@@ -1,0 +1,33 @@
+"""The monitoring graph: which node executables run, under which names.
+
+One definition used by the launch file (``launch/monitor.launch.py``), the
+``bearing-graph`` starter of ``make demo`` and the launch/YAML checks in tests.
+"""
+
+from dataclasses import dataclass
+import pathlib
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    """A node of the graph: ``ros2 run <package> <executable>`` named ``name``."""
+
+    package: str
+    executable: str
+    name: str
+
+
+#: Simulator -> OR and IR observers -> diagnoser (sim/truth is for evaluation only).
+GRAPH = (
+    NodeSpec("bearing_sim", "simulator", "simulator"),
+    NodeSpec("bearing_observer", "observer", "or_observer"),
+    NodeSpec("bearing_observer", "observer", "ir_observer"),
+    NodeSpec("bearing_diagnoser", "diagnoser", "diagnoser"),
+)
+
+CONFIG_NAME = "monitor.yaml"
+
+
+def source_config_path() -> pathlib.Path:
+    """The parameters YAML in the source tree (``src/bearing_bringup/config``)."""
+    return pathlib.Path(__file__).resolve().parent.parent / "config" / CONFIG_NAME

@@ -1,0 +1,42 @@
+"""Start the whole monitoring graph from one parameters YAML (full ROS 2 installs).
+
+    ros2 launch bearing_bringup monitor.launch.py [params_file:=FILE] [namespace:=NS]
+
+The node list is bearing_bringup.graph.GRAPH, the same one `make demo` runs.
+When the simulator ends its scenario (repeat: false) the whole launch shuts down.
+"""
+
+import os
+
+from ament_index_python.packages import get_package_share_directory
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, Shutdown
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import Node
+
+from bearing_bringup.graph import CONFIG_NAME, GRAPH
+
+
+def generate_launch_description():
+    default_params = os.path.join(get_package_share_directory("bearing_bringup"), "config", CONFIG_NAME)
+    params_file = LaunchConfiguration("params_file")
+    namespace = LaunchConfiguration("namespace")
+    nodes = [
+        Node(
+            package=spec.package,
+            executable=spec.executable,
+            name=spec.name,
+            namespace=namespace,
+            parameters=[params_file],
+            output="screen",
+            on_exit=Shutdown() if spec.executable == "simulator" else None,
+        )
+        for spec in GRAPH
+    ]
+    return LaunchDescription([
+        DeclareLaunchArgument("params_file", default_value=default_params,
+                              description="parameters YAML for all nodes"),
+        DeclareLaunchArgument("namespace", default_value="",
+                              description="namespace of this machine's topics, e.g. motor_7"),
+        *nodes,
+    ])
