@@ -67,7 +67,7 @@ class RosGraph:
         self.domain_id = domain_id
         self.env = isolated_env(domain_id)
         os.environ.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-        self.processes = ProcessGroup(env=self.env, out=None)
+        self.processes = ProcessGroup(env=self.env, echo=False)
         self.context = rclpy.Context()
         rclpy.init(context=self.context, domain_id=domain_id)
         self.node = rclpy.create_node("test_listener", context=self.context)

@@ -10,19 +10,23 @@ import pathlib
 
 @dataclass(frozen=True)
 class NodeSpec:
-    """A node of the graph: ``ros2 run <package> <executable>`` named ``name``."""
+    """A node of the graph: ``ros2 run <package> <executable>`` named ``name``.
+
+    ``parameters_module`` holds the node's declared ``PARAMETERS`` (rclpy-free).
+    """
 
     package: str
     executable: str
     name: str
+    parameters_module: str
 
 
 #: Simulator -> OR and IR observers -> diagnoser (sim/truth is for evaluation only).
 GRAPH = (
-    NodeSpec("bearing_sim", "simulator", "simulator"),
-    NodeSpec("bearing_observer", "observer", "or_observer"),
-    NodeSpec("bearing_observer", "observer", "ir_observer"),
-    NodeSpec("bearing_diagnoser", "diagnoser", "diagnoser"),
+    NodeSpec("bearing_sim", "simulator", "simulator", "bearing_sim.sim_node_config"),
+    NodeSpec("bearing_observer", "observer", "or_observer", "bearing_observer.observer_node_config"),
+    NodeSpec("bearing_observer", "observer", "ir_observer", "bearing_observer.observer_node_config"),
+    NodeSpec("bearing_diagnoser", "diagnoser", "diagnoser", "bearing_diagnoser.diagnoser_node_config"),
 )
 
 CONFIG_NAME = "monitor.yaml"

@@ -41,16 +41,17 @@ class ProcessGroup:
     ----------
     env : dict, optional
         Environment for every child (default: this process's).
-    out : text stream, optional
-        Where children's output is echoed, each line prefixed ``[name]``;
-        ``None`` keeps it only in ``Member.lines``.
+    echo : bool
+        Echo children's output, each line prefixed ``[name]``, to ``out``
+        (default: the current ``sys.stdout``); it is always kept in ``Member.lines``.
     on_line : callable(name, line), optional
         Called for every output line (from reader threads).
     """
 
-    def __init__(self, env: Optional[dict] = None, out: Optional[TextIO] = sys.stdout,
+    def __init__(self, env: Optional[dict] = None, echo: bool = True, out: Optional[TextIO] = None,
                  on_line: Optional[Callable[[str, str], None]] = None):
         self.env = dict(os.environ if env is None else env)
+        self.echo_output = echo
         self.out = out
         self.on_line = on_line
         self.members: list[Member] = []
@@ -79,15 +80,17 @@ class ProcessGroup:
             member.lines.append(line)
             if self.on_line is not None:
                 self.on_line(member.name, line)
-            if self.out is not None:
-                with self._lock:
-                    print(f"[{member.name:<{self._width}}] {line}", file=self.out, flush=True)
+            if self.echo_output:
+                self._print(member.name, line)
 
     def echo(self, text: str, name: str = "graph") -> None:
         """Print a line of our own, interleaved with the children's."""
-        if self.out is not None:
-            with self._lock:
-                print(f"[{name:<{self._width}}] {text}", file=self.out, flush=True)
+        if self.echo_output:
+            self._print(name, text)
+
+    def _print(self, name: str, text: str) -> None:
+        with self._lock:
+            print(f"[{name:<{self._width}}] {text}", file=self.out or sys.stdout, flush=True)
 
     def wait_any_exit(self, timeout: float, names: Optional[list] = None) -> Optional[Member]:
         """Wait until one of ``names`` (default: any member) exits; return it, or None on timeout."""

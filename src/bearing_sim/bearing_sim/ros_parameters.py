@@ -46,10 +46,15 @@ def declare(node, specs) -> dict:
     Returns the current values by name. Raises ValueError on an invalid start-up value.
     """
     from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+    from rclpy.exceptions import InvalidParameterTypeException
 
     by_name = {s.name: s for s in specs}
     for spec in specs:
-        node.declare_parameter(spec.name, spec.default, ParameterDescriptor(description=spec.description))
+        try:
+            node.declare_parameter(spec.name, spec.default, ParameterDescriptor(description=spec.description))
+        except InvalidParameterTypeException as exc:
+            raise ValueError(f"{spec.name}: wrong type, expected {type(spec.default).__name__} "
+                             f"like {spec.default!r} ({exc})") from None
     values = {s.name: node.get_parameter(s.name).value for s in specs}
     errors = [f"{name}: {err}" for name, v in values.items() if (err := by_name[name].validate(v))]
     if errors:

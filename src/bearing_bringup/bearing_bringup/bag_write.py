@@ -1,0 +1,184 @@
+"""Writing rosbag2 recordings with ``rosbags`` (no rclpy): the writer used by
+``bearing-bag record`` and the CWRU ``.mat`` → bag conversion of ``bearing-bag from-mat``.
+
+Bags are rosbag2 version 9 directories, MCAP by default (sqlite3 on request), with the
+complete ros2msg definition of every type embedded (dependencies such as
+``std_msgs/Header`` and ``builtin_interfaces/Time`` included) and the type hashes ROS 2
+computes, so ``ros2 bag``, Foxglove and ``mcap-ros2-support`` decode them without this
+project's packages.  The QoS each topic was offered with is stored too, so
+``ros2 bag play`` re-offers ``fault_state`` and ``sim/truth`` as transient local.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from bearing_diagnoser.bag_files import (CUSTOM_NAMESPACE, GRAPH_TOPICS, TOPIC_SPEED, TOPIC_VIBRATION,
+                                         BagError, project_typestore)
+
+STORAGES = ("mcap", "sqlite3")
+
+#: Default chunk length (s) of from-mat, as the simulator publishes.
+DEFAULT_CHUNK_DURATION = 0.01
+
+
+def topic_qos(latched: bool, depth: int):
+    """The rosbags ``Qos`` a topic is offered with (reliable; transient local if latched)."""
+    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, QosReliability,
+                                    QosTime)
+    zero = QosTime(0, 0)
+    return Qos(QosHistory.KEEP_LAST, depth, QosReliability.RELIABLE,
+               QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
+               zero, zero, QosLiveliness.AUTOMATIC, zero, False)
+
+
+def qualify(namespace: str, relative: str) -> str:
+    """Fully qualified topic name of ``relative`` under ``namespace`` (``""`` = root)."""
+    if relative.startswith("/"):
+        return relative
+    ns = (namespace or "").strip("/")
+    return f"/{ns}/{relative}" if ns else f"/{relative}"
+
+
+class BagWriter:
+    """A rosbag2 directory being written; use as a context manager or call :meth:`close`.
+
+    Parameters
+    ----------
+    out : path
+        The bag directory to create (must not exist).
+    storage : ``"mcap"`` or ``"sqlite3"``
+    namespace : str
+        Namespace of the graph being recorded; stored in the bag's custom_data.
+    """
+
+    def __init__(self, out, storage: str = "mcap", namespace: str = ""):
+        from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+        if storage not in STORAGES:
+            raise BagError(f"unknown storage {storage!r}; expected one of {', '.join(STORAGES)}")
+        self.path = Path(out)
+        if self.path.exists():
+            raise BagError(f"{out} exists already; choose a new bag directory")
+        self.typestore = project_typestore()
+        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+        self.storage = storage
+        self._writer = Writer(self.path, version=9, storage_plugin=plugin)
+        self._writer.set_custom_data(CUSTOM_NAMESPACE, (namespace or "").strip("/"))
+        self._writer.set_custom_data("bearing_bag.writer", "bearing-bag (rosbags)")
+        try:
+            self._writer.open()
+        except (WriterError, OSError) as exc:
+            raise BagError(f"cannot create bag {out}: {exc}") from None
+        self.connections: dict = {}
+        self.counts: dict = {}
+        self._closed = False
+
+    def add_topic(self, name: str, msgtype: str, latched: bool = False, depth: int = 10):
+        """Register fully qualified topic ``name`` of ``msgtype``; returns the connection."""
+        if name in self.connections:
+            return self.connections[name]
+        if msgtype not in self.typestore.fielddefs:
+            raise BagError(f"cannot record {name}: type {msgtype} is not known to the bag writer "
+                           "(only ROS 2 standard messages and bearing_msgs)")
+        conn = self._writer.add_connection(name, msgtype, typestore=self.typestore,
+                                           offered_qos_profiles=[topic_qos(latched, depth)])
+        self.connections[name] = conn
+        self.counts[name] = 0
+        return conn
+
+    def write(self, name: str, log_time_ns: int, raw) -> None:
+        """Append one serialized (CDR) message of topic ``name`` logged at ``log_time_ns``."""
+        self._writer.write(self.connections[name], int(log_time_ns), raw)
+        self.counts[name] += 1
+
+    def serialize(self, msg, msgtype: str):
+        """CDR bytes of a rosbags message object (``self.typestore.types[msgtype](...)``)."""
+        return self.typestore.serialize_cdr(msg, msgtype)
+
+    def close(self) -> None:
+        """Write the index and metadata.yaml; afterwards the bag is complete and readable."""
+        if not self._closed:
+            self._closed = True
+            self._writer.close()
+
+    def __enter__(self) -> "BagWriter":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def time_msg(store, seconds: float):
+    """builtin_interfaces/Time of ``seconds`` (≥ 0), nanosecond-rounded."""
+    ns = int(round(seconds * 1e9))
+    return store.types["builtin_interfaces/msg/Time"](sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+@dataclass
+class MatConversion:
+    """Summary of :func:`mat_to_bag`."""
+
+    path: str
+    chunks: int
+    samples: int
+    sample_rate: float
+    rpm: float
+    rpm_from: str  # "file" or "command line"
+    duration: float
+
+
+def mat_to_bag(mat_path, out, sample_rate: float, channel: Optional[str] = None, rpm: Optional[float] = None,
+               chunk_duration: float = DEFAULT_CHUNK_DURATION, start_time: float = 0.0,
+               storage: str = "mcap", namespace: str = "", max_duration: Optional[float] = None) -> MatConversion:
+    """Convert a CWRU-style recording into a bag as a sensor driver would have published it.
+
+    ``vibration/drive_end``: VibrationChunk of ``chunk_duration`` s (the last one may be
+    shorter), samples in m/s² (g × 9.80665), source ``cwru``, frame_id ``drive_end``,
+    stamp = ``start_time`` + first_sample_index / sample_rate.  ``shaft_speed``: one
+    ShaftSpeed (rad/s) per chunk with the same stamp, from ``rpm`` or the file's
+    ``X...RPM`` variable.  Log time = stamp.  ``max_duration`` (s) keeps only the start.
+    Loading (units, channel and rpm lookup) is ``bearing_diagnoser.signal_files.load_mat``.
+    """
+    from bearing_diagnoser.signal_files import load_mat
+    if not (np.isfinite(chunk_duration) and chunk_duration > 0):
+        raise BagError(f"chunk duration must be positive, got {chunk_duration:g} s")
+    if not (np.isfinite(start_time) and start_time >= 0):
+        raise BagError(f"start time must be ≥ 0 s, got {start_time:g}")
+    rec = load_mat(mat_path, sample_rate=sample_rate, rpm=rpm, channel=channel)
+    if rec.rpm is None:
+        raise BagError(f"{mat_path}: no X...RPM variable for channel {rec.channel}; give --rpm")
+    if not (np.isfinite(rec.rpm) and rec.rpm > 0):
+        raise BagError(f"shaft speed must be positive, got {rec.rpm:g} rpm")
+    x = rec.accel
+    if max_duration is not None:
+        x = x[: max(1, int(round(max_duration * rec.sample_rate)))]
+    fs = rec.sample_rate
+    n_chunk = max(1, int(round(chunk_duration * fs)))
+    omega = rec.rpm * 2.0 * np.pi / 60.0
+    speed_source = "cwru" if rpm is None else "command_line"
+    vib, spd = qualify(namespace, TOPIC_VIBRATION), qualify(namespace, TOPIC_SPEED)
+    vib_type, spd_type = GRAPH_TOPICS[TOPIC_VIBRATION].msgtype, GRAPH_TOPICS[TOPIC_SPEED].msgtype
+    count = 0
+    with BagWriter(out, storage, namespace) as bag:
+        ts = bag.typestore
+        Header, Chunk, Speed = (ts.types["std_msgs/msg/Header"], ts.types[vib_type], ts.types[spd_type])
+        bag.add_topic(vib, vib_type, False, GRAPH_TOPICS[TOPIC_VIBRATION].depth)
+        bag.add_topic(spd, spd_type, False, GRAPH_TOPICS[TOPIC_SPEED].depth)
+        for i0 in range(0, x.size, n_chunk):
+            t = start_time + i0 / fs
+            stamp = time_msg(ts, t)
+            log_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+            chunk = Chunk(header=Header(stamp=stamp, frame_id="drive_end"), sample_rate=float(fs),
+                          first_sample_index=i0, source="cwru",
+                          samples=np.ascontiguousarray(x[i0:i0 + n_chunk], dtype=np.float64))
+            bag.write(vib, log_ns, bag.serialize(chunk, vib_type))
+            speed = Speed(header=Header(stamp=stamp, frame_id=""), angular_velocity=float(omega),
+                          source=speed_source)
+            bag.write(spd, log_ns, bag.serialize(speed, spd_type))
+            count += 1
+    return MatConversion(str(out), count, int(x.size), fs, float(rec.rpm),
+                         "file" if rpm is None else "command line", x.size / fs)

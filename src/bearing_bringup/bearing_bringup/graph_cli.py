@@ -1,0 +1,152 @@
+"""``bearing-graph``: run the monitoring graph without ``ros2 launch`` (the ``make demo`` starter).
+
+Starts the node executables of ``bearing_bringup.graph.GRAPH`` as separate
+processes with one parameters YAML (the launch file's), prefixes and interleaves
+their output, prints every fault-state change as it is published, and stops
+everything cleanly on Ctrl-C or when the simulator's scenario ends. It then
+writes a summary against the simulator's ground truth and plots to ``--out``.
+
+Exit 0 only when every node of the graph ran and the scenario completed; when
+parts are missing it runs what exists, names what is missing and exits 3.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import pathlib
+import signal
+import sys
+import threading
+import time
+
+from .graph import CONFIG_NAME, GRAPH
+from .process_group import ProcessGroup
+from .state_report import StateChange, evaluate, format_table
+
+EXIT_MISSING = 3
+EXIT_FAILED = 1
+
+
+def installed_executable(package: str, executable: str) -> pathlib.Path | None:
+    """The executable ``ros2 run`` would start, found through AMENT_PREFIX_PATH, or None."""
+    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        path = pathlib.Path(prefix) / "lib" / package / executable
+        if prefix and path.exists():
+            return path
+    return None
+
+
+def missing_parts() -> list:
+    """Names of graph nodes whose executable or node module is not there."""
+    missing = []
+    for spec in GRAPH:
+        if installed_executable(spec.package, spec.executable) is None:
+            missing.append(f"{spec.name} ({spec.package}/{spec.executable}: executable not built)")
+        elif importlib.util.find_spec(f"{spec.package}.node") is None:
+            missing.append(f"{spec.name} ({spec.package}.node: module missing)")
+    return missing
+
+
+def default_params_file() -> pathlib.Path:
+    from ament_index_python.packages import get_package_share_directory
+
+    return pathlib.Path(get_package_share_directory("bearing_bringup")) / "config" / CONFIG_NAME
+
+
+def node_argv(spec, params_file: pathlib.Path, namespace: str) -> list:
+    argv = [str(installed_executable(spec.package, spec.executable)), "--ros-args",
+            "-r", f"__node:={spec.name}", "--params-file", str(params_file)]
+    if namespace:
+        argv += ["-r", f"__ns:=/{namespace.strip('/')}"]
+    return argv
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="bearing-graph", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--params", type=pathlib.Path, help=f"parameters YAML (default: the installed {CONFIG_NAME})")
+    parser.add_argument("--namespace", default="", help="namespace for all nodes, e.g. motor_7")
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/demo"), help="summary and plots directory")
+    parser.add_argument("--timeout", type=float, default=600.0, help="stop after this many wall seconds")
+    parser.add_argument("--settle", type=float, default=3.0,
+                        help="wall seconds to let observers and diagnoser finish after the simulator ends")
+    args = parser.parse_args(argv)
+
+    params_file = args.params or default_params_file()
+    if not params_file.is_file():
+        print(f"bearing-graph: parameters file {params_file} not found", file=sys.stderr)
+        return EXIT_FAILED
+    missing = missing_parts()
+    runnable = [s for s in GRAPH if not any(m.startswith(f"{s.name} ") for m in missing)]
+
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # a demo stays on this machine
+    from .graph_watcher import GraphWatcher  # rclpy: imported only when the graph runs
+
+    watcher = GraphWatcher(args.namespace)
+    group = ProcessGroup(on_line=None)
+    watcher.on_change = lambda text: group.echo(text, "state")
+    interrupted = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: interrupted.set())
+    for part in missing:
+        group.echo(f"MISSING: {part}")
+    try:
+        for spec in runnable:
+            group.start(spec.name, node_argv(spec, params_file, args.namespace))
+        sim = next((m for m in group.members if m.name == "simulator"), None)
+        deadline = time.monotonic() + args.timeout
+        while time.monotonic() < deadline and not interrupted.is_set():
+            if sim is not None and sim.returncode is not None:
+                break
+            crashed = [m for m in group.members if m is not sim and m.returncode is not None]
+            if crashed:
+                group.echo(f"{crashed[0].name} exited with code {crashed[0].returncode}")
+                break
+            time.sleep(0.1)
+        if sim is not None and sim.returncode == 0:
+            group.echo(f"scenario ended; letting the graph settle for {args.settle:g} s")
+            time.sleep(args.settle)
+    except KeyboardInterrupt:
+        interrupted.set()
+    finally:
+        codes = group.stop()
+        watcher.close()
+
+    group.echo("exit codes: " + ", ".join(f"{name} {code}" for name, code in codes.items()))
+    completed = sim is not None and sim.returncode == 0 and not interrupted.is_set()
+    report = write_report(watcher, args.out, completed)
+    if report:
+        print(report, flush=True)
+    if missing:
+        print("bearing-graph: not runnable yet: " + "; ".join(missing), file=sys.stderr)
+        return EXIT_MISSING
+    others_ok = all(code in (0, -signal.SIGINT) for name, code in codes.items())
+    return 0 if completed and others_ok else EXIT_FAILED
+
+
+def write_report(watcher, out: pathlib.Path, completed: bool) -> str:
+    """Summary table against sim/truth and plots; returns the table text."""
+    out.mkdir(parents=True, exist_ok=True)
+    truth = watcher.truth_changes()
+    decided = watcher.state_changes(all_decisions=True)
+    end = watcher.signal_end()
+    if not truth or end is None:
+        return "no ground truth received: nothing to summarise"
+    results = evaluate(truth, decided, end)
+    table = format_table(results)
+    (out / "summary.md").write_text(
+        f"# Monitoring run\n\nscenario completed: {completed}\n\n{table}\n")
+    (out / "summary.json").write_text(json.dumps({
+        "completed": completed,
+        "segments": [dict(true_state=r.true_state, start=r.start, end=r.end, detected_state=r.detected_state,
+                          detected_at=r.detected_at, delay=r.delay, onset=r.onset, correct=r.correct)
+                     for r in results],
+        "state_changes": [c.__dict__ for c in watcher.state_changes()],
+    }, indent=2))
+    watcher.plot(out / "states.png", truth, decided, end)
+    return f"summary against ground truth (also in {out}/summary.md):\n{table}"
+
+
+if __name__ == "__main__":
+    sys.exit(main())

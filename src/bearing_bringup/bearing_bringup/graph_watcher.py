@@ -1,0 +1,130 @@
+"""An rclpy listener for ``bearing-graph``: fault states, ground truth and the vibration, for the report."""
+
+from __future__ import annotations
+
+import collections
+import threading
+from typing import Callable, Optional
+
+import numpy as np
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from bearing_msgs.msg import FaultState as FaultStateMsg, VibrationChunk
+from bearing_sim.fault_states import FaultState
+
+from .state_report import StateChange
+
+LATCHED = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+STREAM = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+KEEP_SIGNAL_S = 60.0  # seconds of vibration kept for the plot
+
+
+def seconds(stamp) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+class GraphWatcher:
+    """Collects ``fault_state``, ``sim/truth`` and ``vibration/drive_end`` in a background thread."""
+
+    def __init__(self, namespace: str = ""):
+        self.on_change: Optional[Callable[[str], None]] = None
+        self._lock = threading.Lock()
+        self._decisions: list = []
+        self._truth: list = []
+        self._signal = collections.deque()
+        self._fs = None
+        self._end = None
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        ns = f"/{namespace.strip('/')}" if namespace else ""
+        self.node = rclpy.create_node("graph_watcher", namespace=ns or None, context=self.context)
+        self.node.create_subscription(FaultStateMsg, "fault_state", self._on_state, LATCHED)
+        self.node.create_subscription(FaultStateMsg, "sim/truth", self._on_truth, LATCHED)
+        self.node.create_subscription(VibrationChunk, "vibration/drive_end", self._on_chunk, STREAM)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._running = True
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self):
+        while self._running and self.context.ok():
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def _on_state(self, msg):
+        change = StateChange(int(msg.state), seconds(msg.onset), seconds(msg.header.stamp), float(msg.confidence))
+        with self._lock:
+            previous = self._decisions[-1] if self._decisions else None
+            self._decisions.append(change)
+        if previous is None or previous.state != change.state:
+            before = FaultState(previous.state).name if previous else "(start)"
+            text = (f"t={change.detected_at:.3f} s  {before} -> {FaultState(change.state).name}  "
+                    f"(confidence {change.confidence:.2f}, onset {change.onset:.3f} s)")
+            if self.on_change:
+                self.on_change(text)
+
+    def _on_truth(self, msg):
+        with self._lock:
+            self._truth.append(StateChange(int(msg.state), seconds(msg.onset), seconds(msg.header.stamp)))
+
+    def _on_chunk(self, msg):
+        t0 = seconds(msg.header.stamp)
+        samples = np.asarray(msg.samples)
+        with self._lock:
+            self._fs = msg.sample_rate
+            self._end = t0 + len(samples) / msg.sample_rate
+            self._signal.append((t0, samples))
+            while self._signal and self._end - self._signal[0][0] > KEEP_SIGNAL_S:
+                self._signal.popleft()
+
+    def truth_changes(self) -> list:
+        with self._lock:
+            return list(self._truth)
+
+    def state_changes(self, all_decisions: bool = False) -> list:
+        """Published states; only the changes unless ``all_decisions``."""
+        with self._lock:
+            decisions = list(self._decisions)
+        if all_decisions:
+            return decisions
+        return [d for i, d in enumerate(decisions) if i == 0 or decisions[i - 1].state != d.state]
+
+    def signal_end(self) -> Optional[float]:
+        with self._lock:
+            return self._end
+
+    def plot(self, path, truth, decided, end) -> None:
+        """Acceleration with the true and the published states (PNG)."""
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        with self._lock:
+            parts = list(self._signal)
+            fs = self._fs
+        fig, (ax_sig, ax_state) = plt.subplots(2, 1, sharex=True, figsize=(10, 5.5),
+                                               gridspec_kw={"height_ratios": [2, 1]})
+        if parts and fs:
+            t = np.concatenate([t0 + np.arange(len(s)) / fs for t0, s in parts])
+            ax_sig.plot(t, np.concatenate([s for _, s in parts]), lw=0.4)
+        ax_sig.set_ylabel("drive-end accel (m/s²)")
+        for changes, label, style in ((truth, "true", "k-"), (decided, "published", "r--")):
+            if changes:
+                times = [c.onset if label == "true" else c.detected_at for c in changes] + [end]
+                states = [c.state for c in changes] + [changes[-1].state]
+                ax_state.step(times, states, style, where="post", label=label)
+        ax_state.set_yticks([int(s) for s in FaultState], [s.name for s in FaultState], fontsize=7)
+        ax_state.set_xlabel("time (s)")
+        ax_state.legend(loc="upper left", fontsize=8)
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+
+    def close(self) -> None:
+        self._running = False
+        self._thread.join(timeout=2.0)
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)

@@ -1,0 +1,168 @@
+"""The ``diagnoser`` node: fault states from the two observers' residuals.
+
+Subscribes ``residual/outer_race`` and ``residual/inner_race`` (and
+``shaft_speed`` for the health report); publishes ``fault_state`` (FaultState,
+reliable + transient local: a late subscriber sees the current state) on every
+decision, and ``/diagnostics`` (OK for NORMAL, ERROR for a fault, WARN for
+UNKNOWN or a silent observer, STALE when no residual arrives). Signal timing
+comes from the residuals' stamps and sample indices only, so replays at any
+rate (with ``use_sim_time``) give the same decisions.
+"""
+
+import math
+import sys
+
+import numpy as np
+import rclpy
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from bearing_msgs.msg import FaultState as FaultStateMsg, Residual, ShaftSpeed
+from bearing_observer.chunk_stream import ChunkStream
+from bearing_sim.fault_states import FaultState
+from bearing_sim.ros_parameters import declare
+
+from .decision import Diagnoser, config_for
+from .diagnoser_node_config import PARAMETERS, TOPIC_SPEED, TOPIC_STATE, TOPICS_RESIDUAL, health
+
+STREAM_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+STATE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+WARN_PERIOD_S = 5.0
+
+
+def seconds(stamp) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def to_stamp(t: float) -> Time:
+    sec = math.floor(t)
+    return Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000)
+
+
+class DiagnoserNode(Node):
+    """Thin adapter: Residual chunks -> Diagnoser.update -> FaultState and /diagnostics."""
+
+    def __init__(self):
+        super().__init__("diagnoser")
+        self.values = declare(self, PARAMETERS)
+        self.core = None
+        self.core_streams = set()  # hypotheses that have fed the current core (a restart of either starts a new one)
+        self.time_offset = None  # stamp of sample index 0 (s)
+        self.streams = {h: ChunkStream(topic) for h, topic in TOPICS_RESIDUAL.items()}
+        self.last_heard = {h: None for h in TOPICS_RESIDUAL}
+        self.last_decision = None
+        self.shaft_speed = None
+        self.pub_state = self.create_publisher(FaultStateMsg, TOPIC_STATE, STATE_QOS)
+        self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        for h, topic in TOPICS_RESIDUAL.items():
+            self.create_subscription(Residual, topic, lambda msg, h=h: self.on_residual(h, msg), STREAM_QOS)
+        self.create_subscription(ShaftSpeed, TOPIC_SPEED, self.on_speed, QoSProfile(depth=10))
+        self.create_timer(float(self.values["diagnostics_period"]), self.publish_diagnostics)
+
+    def _make_core(self, model_set: str) -> Diagnoser:
+        overrides = {"pfa": float(self.values["false_alarm_probability"])}
+        if self.values["window"] > 0:
+            overrides["window_s"] = float(self.values["window"])
+        if self.values["hop"] > 0:
+            overrides["hop_s"] = float(self.values["hop"])
+        name = self.values["model_set"] or model_set
+        core = Diagnoser(config_for(name, **overrides), model_set=name)
+        core.keep_history = False
+        cfg = core.config
+        self.get_logger().info(f"deciding with {name} defaults: window {cfg.window_s:g} s, hop {cfg.hop_s:g} s, "
+                               f"false-alarm probability {cfg.pfa:g} per window")
+        return core
+
+    def on_speed(self, msg: ShaftSpeed) -> None:
+        self.shaft_speed = msg.angular_velocity
+
+    def on_residual(self, hypothesis: FaultState, msg: Residual) -> None:
+        self.last_heard[hypothesis] = self.get_clock().now()
+        r = np.asarray(msg.residual, dtype=float)
+        stamp = seconds(msg.header.stamp)
+        verdict = self.streams[hypothesis].check(stamp, msg.first_sample_index, msg.sample_rate, r)
+        if verdict.accepted and not (len(msg.estimate) == len(msg.impulse_train) == len(r)):
+            verdict = None
+        if not verdict or not verdict.accepted:
+            self.get_logger().warn(f"rejected residual chunk: {verdict.reason if verdict else 'array lengths differ'}",
+                                   throttle_duration_sec=WARN_PERIOD_S)
+            return
+        if self.core is None or (verdict.restart and hypothesis in self.core_streams):
+            if self.core is not None:
+                self.get_logger().info(f"{verdict.reason}; restarting the decision")
+            self.core = self._make_core(msg.model_set)
+            self.core_streams = set()
+            self.time_offset = stamp - msg.first_sample_index / msg.sample_rate
+        self.core_streams.add(hypothesis)
+        try:
+            decisions = self.core.update(hypothesis, msg.first_sample_index, msg.sample_rate, r,
+                                         np.asarray(msg.estimate), np.asarray(msg.impulse_train), msg.fault_frequency)
+        except ValueError as exc:
+            self.streams[hypothesis].counts["rejected by decision"] += 1
+            self.get_logger().warn(f"rejected residual chunk: {exc}", throttle_duration_sec=WARN_PERIOD_S)
+            return
+        for decision in decisions:
+            self.publish_state(decision)
+
+    def publish_state(self, decision) -> None:
+        msg = FaultStateMsg(state=int(decision.state), confidence=float(decision.confidence),
+                            model_set=self.core.model_set, detail=decision.detail)
+        msg.header.stamp = to_stamp(self.time_offset + decision.time)
+        msg.onset = to_stamp(self.time_offset + decision.onset)
+        msg.hypotheses = list(decision.scores)
+        msg.scores = [float(v) for v in decision.scores.values()]
+        self.pub_state.publish(msg)
+        if decision.changed:
+            self.get_logger().info(f"t={self.time_offset + decision.time:.3f} s  state {decision.state.name} "
+                                   f"(confidence {decision.confidence:.2f}, onset "
+                                   f"{self.time_offset + decision.onset:.3f} s)")
+        self.last_decision = decision
+
+    def publish_diagnostics(self) -> None:
+        now = self.get_clock().now()
+        timeout = float(self.values["stale_timeout"])
+        silent = [TOPICS_RESIDUAL[h] for h, t in self.last_heard.items()
+                  if t is None or (now - t).nanoseconds * 1e-9 > timeout]
+        state = self.last_decision.state if self.last_decision else FaultState.NORMAL
+        level, message = health(state, silent, len(silent) == len(TOPICS_RESIDUAL))
+        status = DiagnosticStatus(level=bytes([level]), name=f"{self.get_name()}: bearing drive_end",
+                                  message=message, hardware_id="drive_end")
+        values = {"state": FaultState(state).name}
+        if self.last_decision is not None:
+            values["confidence"] = f"{self.last_decision.confidence:.3f}"
+            values["onset (s)"] = f"{self.time_offset + self.last_decision.onset:.4f}"
+            values.update({k: f"{v:.4g}" for k, v in self.last_decision.scores.items()})
+        if self.shaft_speed is not None:
+            values["shaft speed (rad/s)"] = f"{self.shaft_speed:.3f}"
+        for h, stream in self.streams.items():
+            values[f"{TOPICS_RESIDUAL[h]} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
+        status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = now.to_msg()
+        self.pub_diag.publish(array)
+
+
+def main(args=None) -> int:
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = DiagnoserNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ValueError as exc:
+        print(f"diagnoser: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,112 @@
+"""Checking a stream of signal chunks before it reaches a filter (no rclpy).
+
+Nodes that consume chunked signals (observers: vibration; diagnoser: residuals)
+pass every chunk through a ``ChunkStream``. Bad chunks are rejected with a
+reason and counted, never processed: empty or huge chunks, non-positive or
+non-finite sample rates, a rate other than the consumer's, NaN/inf samples,
+stamps that go backwards or repeat. A chunk that does not continue the previous
+one (a gap, a restarted producer) is accepted with ``resync`` set, so the
+consumer restarts its filter state instead of bridging the hole.
+"""
+
+from __future__ import annotations
+
+import collections
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+MAX_CHUNK_SAMPLES = 2_000_000  # > 1 s at 1 MHz; larger chunks are refused as malformed
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Outcome of checking one chunk.
+
+    ``accepted``; ``resync``: restart filter state first (start, gap, restart);
+    ``restart``: the producer restarted or changed rate, so history before this
+    chunk is not comparable; ``reason``: text for logs.
+    """
+
+    accepted: bool
+    resync: bool = False
+    reason: str = ""
+    restart: bool = False
+
+
+class ChunkStream:
+    """Continuity and sanity checks for one chunked signal stream.
+
+    Parameters
+    ----------
+    name : str
+        Stream name used in reasons, e.g. ``vibration/drive_end``.
+    sample_rate : float, optional
+        Required sample rate (Hz); None accepts any positive rate but a change of
+        rate is reported as a resync.
+    """
+
+    def __init__(self, name: str, sample_rate: Optional[float] = None,
+                 max_samples: int = MAX_CHUNK_SAMPLES):
+        self.name = name
+        self.sample_rate = sample_rate
+        self.max_samples = max_samples
+        self.counts = collections.Counter()
+        self._next_index: Optional[int] = None
+        self._next_time: Optional[float] = None
+        self._last_stamp: Optional[float] = None
+        self._rate: Optional[float] = None
+
+    def check(self, stamp: float, first_index: int, sample_rate: float, samples: np.ndarray) -> Verdict:
+        """Check a chunk whose first sample is at ``stamp`` (s) with stream index ``first_index``."""
+        n = len(samples)
+        restarted = first_index == 0 and self._last_stamp is not None  # producer restarted (or replay)
+        if restarted:
+            self._next_index = None
+            self._last_stamp = None
+        problem = self._problem(stamp, sample_rate, samples, n)
+        if problem:
+            self.counts["rejected"] += 1
+            self.counts[problem.split(":")[0]] += 1
+            if problem.startswith("non-finite"):
+                self._next_index = None  # the hole must not be bridged: resync on the next chunk
+            return Verdict(False, reason=f"{self.name}: {problem}")
+        rate_changed = self._rate is not None and self._rate != sample_rate
+        resync = self._next_index is None or rate_changed
+        reason = ("stream restarted" if restarted else "start of stream") if self._next_index is None else ""
+        if not resync and (first_index != self._next_index or abs(stamp - self._next_time) > 0.5 / sample_rate):
+            resync = True
+            missing = first_index - self._next_index
+            reason = (f"{self.name}: gap of {missing} samples ({stamp - self._next_time:+.6f} s) before "
+                      f"index {first_index}; restarting")
+            self.counts["gaps"] += 1
+        elif rate_changed:
+            reason = f"{self.name}: sample rate changed {self._rate:g} -> {sample_rate:g} Hz; restarting"
+        self._rate = sample_rate
+        self._last_stamp = stamp
+        self._next_index = first_index + n
+        self._next_time = stamp + n / sample_rate
+        self.counts["accepted"] += 1
+        return Verdict(True, resync=resync, reason=reason, restart=restarted or rate_changed)
+
+    def _problem(self, stamp, sample_rate, samples, n) -> str:
+        if not np.isfinite(sample_rate) or sample_rate <= 0:
+            return f"invalid sample rate: {sample_rate!r} Hz"
+        if self.sample_rate is not None and abs(sample_rate - self.sample_rate) > 1e-9 * self.sample_rate:
+            return f"wrong sample rate: {sample_rate:g} Hz, expected {self.sample_rate:g} Hz"
+        if n == 0:
+            return "empty chunk: no samples"
+        if n > self.max_samples:
+            return f"huge chunk: {n} samples > {self.max_samples}"
+        if not np.all(np.isfinite(samples)):
+            bad = int(np.count_nonzero(~np.isfinite(samples)))
+            return f"non-finite samples: {bad} NaN/inf of {n}"
+        if self._last_stamp is not None and stamp <= self._last_stamp:
+            return f"out-of-order stamp: {stamp:.6f} s after {self._last_stamp:.6f} s"
+        return ""
+
+    def restart(self) -> None:
+        """Forget continuity (e.g. after the consumer reset itself)."""
+        self._next_index = None
+        self._last_stamp = None

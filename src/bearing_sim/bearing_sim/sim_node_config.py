@@ -1,0 +1,61 @@
+"""Parameters of the ``simulator`` node and how they become a simulation (no rclpy).
+
+The node (``node.py``) declares ``PARAMETERS``; ``build_run`` turns their values
+into a validated SimulationConfig and schedule. Topic names and QoS depths are
+the contract's (../shared/CONTRACT.md).
+"""
+
+from dataclasses import dataclass
+
+from .ros_parameters import ParameterSpec, positive
+from .schedule import parse_schedule, scenario_schedule
+from .simulator import SimulationConfig
+
+PARAMETERS = (
+    ParameterSpec("scenario", "", "thesis case: normal, or, ir, or-ir, ir-or, or-normal, normal-or, "
+                  "ir-normal, normal-ir; empty (with empty schedule) = normal operation without end"),
+    ParameterSpec("schedule", "", "segments 'fault:seconds,...' e.g. 'normal:0.1,outer_race:0.2' "
+                  "(overrides scenario)"),
+    ParameterSpec("segment_duration", 0.2, "seconds per scenario segment", positive),
+    ParameterSpec("rpm", 1800.0, "shaft speed (rev/min)", positive),
+    ParameterSpec("sample_rate", 48000.0, "output sample rate of vibration/drive_end (Hz), 4 kHz-1 MHz", positive),
+    ParameterSpec("chunk_duration", 0.01, "seconds of signal per published chunk", positive),
+    ParameterSpec("realtime", True, "pace publishing to wall-clock real time (false: as fast as possible)"),
+    ParameterSpec("repeat", False, "restart the scenario/schedule when it ends instead of exiting 0"),
+    ParameterSpec("noise_density", 0.0, "measurement noise density ((m/s^2)/sqrt(Hz)); 0 = off", lambda v: None if v >= 0 else "must be >= 0"),
+    ParameterSpec("seed", 0, "random seed of the measurement noise"),
+    ParameterSpec("variant", "default", "model variant (see bearing_sim.model_parameters)"),
+    ParameterSpec("publish_clock", False, "publish /clock with the simulation time (for use_sim_time consumers)"),
+    ParameterSpec("frame_id", "drive_end", "frame_id of vibration/drive_end (sensor location)"),
+    ParameterSpec("linger", 1.0, "seconds to keep serving after the last chunk so subscribers receive it", lambda v: None if v >= 0 else "must be >= 0"),
+)
+
+TOPIC_VIBRATION = "vibration/drive_end"
+TOPIC_UNBALANCE = "unbalance"
+TOPIC_SHAFT_SPEED = "shaft_speed"
+TOPIC_TRUTH = "sim/truth"
+SOURCE = "simulator"
+
+
+@dataclass(frozen=True)
+class SimulationRun:
+    """What the node simulates: config, schedule (None = normal operation without end), chunk size."""
+
+    config: SimulationConfig
+    schedule: object
+    chunk_samples: int
+
+
+def build_run(values: dict) -> SimulationRun:
+    """Validated run from node parameter values; ValueError with the reason otherwise."""
+    config = SimulationConfig(rpm=float(values["rpm"]), sample_rate=float(values["sample_rate"]),
+                              noise_density=float(values["noise_density"]), seed=int(values["seed"]),
+                              variant=values["variant"])
+    if values["schedule"]:
+        schedule = parse_schedule(values["schedule"])
+    elif values["scenario"]:
+        schedule = scenario_schedule(values["scenario"], float(values["segment_duration"]))
+    else:
+        schedule = None
+    chunk_samples = max(1, int(round(float(values["chunk_duration"]) * config.sample_rate)))
+    return SimulationRun(config, schedule, chunk_samples)

@@ -1,0 +1,81 @@
+"""The diagnoser node through real DDS: fault states, /diagnostics, a silent observer, staleness."""
+
+import numpy as np
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray
+
+from bearing_diagnoser.synthetic import burst_train, white_noise
+from bearing_msgs.msg import FaultState, Residual
+from bearing_sim.bearing_geometry import DRIVE_END_6205
+from graph_qos import LATCHED
+
+pytestmark = pytest.mark.ros
+
+FS = 48000.0
+N = 480
+BPFO = DRIVE_END_6205.bpfo(30.0)
+BPFI = DRIVE_END_6205.bpfi(30.0)
+
+
+def residual_msg(hypothesis, i, y, fault_hz):
+    msg = Residual(sample_rate=FS, first_sample_index=i * N, fault_hypothesis=hypothesis,
+                   model_set="sim_48k", fault_frequency=fault_hz)
+    t = i * N / FS
+    msg.header.stamp.sec = int(t)
+    msg.header.stamp.nanosec = int(round((t - int(t)) * 1e9))
+    msg.residual = [float(v) for v in y]  # a model-free residual: estimate 0, so y = residual
+    msg.estimate = [0.0] * len(y)
+    msg.impulse_train = [0.0] * len(y)
+    return msg
+
+
+def signal_normal_then_or(duration=0.4, change=0.2):
+    noise = white_noise(duration, FS, 4.5e-3)
+    bursts = burst_train(duration, FS, BPFO, amplitude=30.0, start=change)
+    return noise + bursts
+
+
+def test_states_and_diagnostics_follow_the_residuals(ros_graph):
+    states = ros_graph.subscribe("fault_state", FaultState, LATCHED)
+    diags = ros_graph.subscribe("/diagnostics", DiagnosticArray)
+    pub_or = ros_graph.publisher("residual/outer_race", Residual)
+    pub_ir = ros_graph.publisher("residual/inner_race", Residual)
+    node = ros_graph.start("bearing_diagnoser", "diagnoser", params={"stale_timeout": 1.0,
+                                                                     "diagnostics_period": 0.2})
+    ros_graph.wait_until(lambda: pub_or.get_subscription_count() and pub_ir.get_subscription_count(),
+                         30.0, "the diagnoser to subscribe")
+    y = signal_normal_then_or()
+    for i in range(len(y) // N):
+        pub_or.publish(residual_msg(1, i, y[i * N:(i + 1) * N], BPFO))
+        pub_ir.publish(residual_msg(2, i, y[i * N:(i + 1) * N], BPFI))
+    ros_graph.wait_until(lambda: states and states[-1].state == FaultState.OUTER_RACE, 30.0,
+                         "OUTER_RACE to be published")
+    first_or = next(m for m in states if m.state == FaultState.OUTER_RACE)
+    onset = first_or.onset.sec + first_or.onset.nanosec * 1e-9
+    decided = first_or.header.stamp.sec + first_or.header.stamp.nanosec * 1e-9
+    assert 0.17 <= onset <= 0.25 and decided - 0.2 <= 0.05
+    assert all(m.state == FaultState.NORMAL for m in states[:states.index(first_or)])
+    assert "outer_race" in list(first_or.hypotheses) and 0.0 <= first_or.confidence <= 1.0
+    # /diagnostics: ERROR for the fault while residuals flow; STALE once they stop.
+    ros_graph.wait_until(lambda: any(s.level == b"\x03" for d in diags for s in d.status), 10.0,
+                         "/diagnostics to go STALE")
+    levels = [s.level for d in diags for s in d.status]
+    assert b"\x02" in levels[:levels.index(b"\x03")]  # ERROR while the fault was current
+    stale = next(s for d in diags for s in d.status if s.level == b"\x03")
+    assert "no residuals" in stale.message
+    assert node.returncode is None
+
+
+def test_one_silent_observer_is_reported_and_decisions_continue(ros_graph):
+    states = ros_graph.subscribe("fault_state", FaultState, LATCHED)
+    diags = ros_graph.subscribe("/diagnostics", DiagnosticArray)
+    pub_or = ros_graph.publisher("residual/outer_race", Residual)
+    ros_graph.start("bearing_diagnoser", "diagnoser", params={"diagnostics_period": 0.2})
+    ros_graph.wait_until(lambda: pub_or.get_subscription_count(), 30.0, "the diagnoser to subscribe")
+    y = signal_normal_then_or(duration=1.6, change=0.0)
+    for i in range(len(y) // N):
+        pub_or.publish(residual_msg(1, i, y[i * N:(i + 1) * N], BPFO))
+    ros_graph.wait_until(lambda: states and states[-1].state == FaultState.OUTER_RACE, 30.0,
+                         "OUTER_RACE from the OR stream alone")
+    ros_graph.wait_until(lambda: any("waiting for residual/inner_race" in s.message
+                                     for d in diags for s in d.status), 10.0, "a WARN naming the silent observer")

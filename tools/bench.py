@@ -1,0 +1,81 @@
+"""`make bench`: run every package's benchmarks and write a Markdown table.
+
+Each benchmark module exposes ``bench_*()`` functions returning rows
+``(figure, value, unit)``. Rows go to ``--out`` (default out/bench.md) as
+| figure | value | unit | machine |. A failing benchmark is reported in the
+table and makes the exit code non-zero; the others still run.
+"""
+
+import argparse
+import importlib
+import inspect
+import os
+import pathlib
+import platform
+import sys
+import time
+import traceback
+
+MODULES = (
+    "bearing_sim.sim_benchmarks",
+    "bearing_observer.obs_benchmarks",
+    "bearing_diagnoser.diag_benchmarks",
+    "bearing_bringup.bag_benchmarks",
+    "bearing_bringup.graph_benchmarks",
+)
+
+
+def machine() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
+
+
+def fmt(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return str(value)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/bench.md"))
+    parser.add_argument("--only", help="substring of the benchmark functions to run")
+    args = parser.parse_args(argv)
+    host = machine()
+    lines = ["| figure | value | unit | machine |", "|---|---|---|---|"]
+    failed = 0
+    for name in MODULES:
+        module = importlib.import_module(name)
+        for fname, func in inspect.getmembers(module, inspect.isfunction):
+            if not fname.startswith("bench_") or func.__module__ != name:
+                continue
+            if args.only and args.only not in fname:
+                continue
+            print(f"[bench] {name}.{fname} ...", flush=True)
+            start = time.monotonic()
+            try:
+                rows = func()
+            except Exception:  # a broken benchmark is reported, not fatal to the others
+                failed += 1
+                traceback.print_exc()
+                lines.append(f"| {name}.{fname} | FAILED | - | {host} |")
+                continue
+            for figure, value, unit in rows:
+                lines.append(f"| {figure} | {fmt(value)} | {unit} | {host} |")
+                print(f"[bench]   {figure}: {fmt(value)} {unit}", flush=True)
+            print(f"[bench]   ({time.monotonic() - start:.1f} s)", flush=True)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text("# Benchmarks\n\n" + "\n".join(lines) + "\n")
+    print(f"[bench] wrote {args.out}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
