@@ -112,8 +112,20 @@ class SimulatorNode(Node):
         self.last_truth = int(truth[-1])
 
 
+def wait_for_subscribers(node: SimulatorNode) -> None:
+    """Hold the start until the expected consumers are matched (published chunks are not latched)."""
+    wanted = int(node.values["wait_for_subscribers"])
+    deadline = time.monotonic() + float(node.values["subscriber_timeout"])
+    while rclpy.ok() and node.pub_vib.get_subscription_count() < wanted and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    count = node.pub_vib.get_subscription_count()
+    if count < wanted:
+        node.get_logger().warn(f"starting with {count} of {wanted} subscribers to {node.pub_vib.topic_name}")
+
+
 def run_node(node: SimulatorNode) -> None:
     """Publish until the run ends, pacing to wall-clock time when asked; log the real-time factor."""
+    wait_for_subscribers(node)
     realtime = bool(node.values["realtime"])
     wall_start = time.monotonic()
     sim_seconds = 0.0

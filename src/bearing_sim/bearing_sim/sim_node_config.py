@@ -8,7 +8,7 @@ the contract's (../shared/CONTRACT.md).
 from dataclasses import dataclass
 
 from .ros_parameters import ParameterSpec, positive
-from .schedule import parse_schedule, scenario_schedule
+from .schedule import parse_schedule, scenario
 from .simulator import SimulationConfig
 
 PARAMETERS = (
@@ -27,6 +27,9 @@ PARAMETERS = (
     ParameterSpec("variant", "default", "model variant (see bearing_sim.model_parameters)"),
     ParameterSpec("publish_clock", False, "publish /clock with the simulation time (for use_sim_time consumers)"),
     ParameterSpec("frame_id", "drive_end", "frame_id of vibration/drive_end (sensor location)"),
+    ParameterSpec("wait_for_subscribers", 0, "before publishing, wait until vibration/drive_end has this many "
+                  "subscribers (the graph's observers), at most subscriber_timeout s", lambda v: None if v >= 0 else "must be >= 0"),
+    ParameterSpec("subscriber_timeout", 10.0, "seconds to wait for subscribers before starting anyway", positive),
     ParameterSpec("linger", 1.0, "seconds to keep serving after the last chunk so subscribers receive it", lambda v: None if v >= 0 else "must be >= 0"),
 )
 
@@ -54,7 +57,7 @@ def build_run(values: dict) -> SimulationRun:
     if values["schedule"]:
         schedule = parse_schedule(values["schedule"])
     elif values["scenario"]:
-        schedule = scenario_schedule(values["scenario"], float(values["segment_duration"]))
+        schedule = scenario(values["scenario"], float(values["segment_duration"]))
     else:
         schedule = None
     chunk_samples = max(1, int(round(float(values["chunk_duration"]) * config.sample_rate)))
