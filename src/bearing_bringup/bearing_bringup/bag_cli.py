@@ -2,7 +2,8 @@
 for machines without ``ros2 bag`` (the PyPI ROS 2 wheels do not include rosbag2).
 
     bearing-bag record [--topics T ...] [--namespace NS] [--storage mcap|sqlite3] [--duration S] --out BAG_DIR
-    bearing-bag play BAG_DIR [--rate R] [--clock] [--topics T ...] [--loop] [--delay S] [--namespace NS]
+    bearing-bag play BAG_DIR [--rate R] [--clock] [--topics T ...] [--loop] [--delay S]
+                     [--wait-for-subscribers] [--namespace NS]
     bearing-bag info BAG_DIR
     bearing-bag from-mat FILE.mat --sample-rate HZ [--channel X105_DE_time] [--rpm RPM]
                          [--chunk-duration 0.01] [--start-time 0] [--duration S] --out BAG_DIR
@@ -43,6 +44,8 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--loop", "-l", action="store_true", help="repeat until Ctrl-C")
     pl.add_argument("--delay", type=float, default=1.0, metavar="S",
                     help="wait S seconds for subscribers to be discovered before playing (default 1)")
+    pl.add_argument("--wait-for-subscribers", action="store_true",
+                    help="before playing, wait (up to 60 s) until every played topic has a subscriber")
     pl.add_argument("--namespace", default=None, help="republish the graph topics under this namespace")
 
     i = sub.add_parser("info", help="topics, types, message counts, duration, storage")
@@ -113,7 +116,8 @@ def main(argv=None) -> int:
         elif args.command == "play":
             from .bag_play import play
             play(args.bag, rate=args.rate, clock=args.clock, topics=args.topics, loop=args.loop,
-                 delay=args.delay, namespace=args.namespace)
+                 delay=args.delay, namespace=args.namespace,
+                 wait_for_subscribers=args.wait_for_subscribers)
     except (BagError, InputError) as exc:
         print(f"bearing-bag: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

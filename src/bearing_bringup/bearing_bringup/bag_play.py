@@ -26,6 +26,12 @@ from .bag_write import qualify
 #: Wall-clock period (s) of /clock messages while waiting between recorded messages.
 CLOCK_PERIOD = 0.025
 
+#: Longest wait (s) for subscribers with ``wait_for_subscribers``.
+SUBSCRIBER_TIMEOUT = 60.0
+
+#: Extra wait (s) after the subscribers appeared in the graph, for DDS endpoint matching.
+MATCH_SETTLE = 0.5
+
 #: Keep-last depth of the player's stream publishers (≥ the graph's 50, to absorb bursts).
 PLAY_DEPTH = 200
 
@@ -63,12 +69,14 @@ def select_connections(reader, topics=None, namespace=None) -> list:
 
 
 def play(bag_dir, rate: float = 1.0, clock: bool = False, topics=None, loop: bool = False,
-         delay: float = 1.0, namespace: Optional[str] = None,
+         delay: float = 1.0, namespace: Optional[str] = None, wait_for_subscribers: bool = False,
          log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)) -> dict:
     """Publish the recording; return the number of messages published per topic.
 
     ``namespace`` republishes the graph's topics under another namespace (``""`` = root)
-    instead of the one they were recorded in.
+    instead of the one they were recorded in.  ``wait_for_subscribers``: before the
+    ``delay``, wait (up to :data:`SUBSCRIBER_TIMEOUT` s) until every played topic has a
+    subscriber, so that nothing is published before the receivers are matched.
     """
     import rclpy
     from rclpy.duration import Duration
@@ -114,6 +122,15 @@ def play(bag_dir, rate: float = 1.0, clock: bool = False, topics=None, loop: boo
 
             log(f"bearing-bag: playing {bag_dir} at {rate:g}x: {', '.join(out_names.values())}"
                 + (" + /clock" if clock else ""))
+            if wait_for_subscribers:
+                deadline = time.monotonic() + SUBSCRIBER_TIMEOUT
+                while not stop and time.monotonic() < deadline and \
+                        any(p.get_subscription_count() == 0 for p in pubs.values()):
+                    executor.spin_once(timeout_sec=0.05)
+                missing = [out_names[t] for t, p in pubs.items() if p.get_subscription_count() == 0]
+                if missing:
+                    log(f"bearing-bag: no subscriber after {SUBSCRIBER_TIMEOUT:g} s on {', '.join(missing)}; playing anyway")
+                delay = max(delay, MATCH_SETTLE)
             end = time.monotonic() + max(0.0, delay)
             while not stop and time.monotonic() < end:
                 executor.spin_once(timeout_sec=min(0.05, max(0.0, end - time.monotonic())))

@@ -93,6 +93,8 @@ def record(out, topics=None, namespace: str = "", storage: str = "mcap", duratio
 
                 def on_raw(raw, _name=qualified):
                     bag.write(_name, clock.now().nanoseconds, raw)
+                    if bag.counts[_name] == 1:
+                        log(f"bearing-bag: first message on {_name}")
 
                 node.create_subscription(message_class(msgtype), qualified, on_raw,
                                          rclpy_qos(latched, max(depth, 100)), raw=True)

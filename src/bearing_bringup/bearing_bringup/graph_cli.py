@@ -70,8 +70,9 @@ def main(argv=None) -> int:
     parser.add_argument("--namespace", default="", help="namespace for all nodes, e.g. motor_7")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/demo"), help="summary and plots directory")
     parser.add_argument("--timeout", type=float, default=600.0, help="stop after this many wall seconds")
-    parser.add_argument("--settle", type=float, default=3.0,
-                        help="wall seconds to let observers and diagnoser finish after the simulator ends")
+    parser.add_argument("--settle", type=float, default=30.0,
+                        help="at most this many wall seconds for the diagnoser to decide the last window "
+                             "after the simulator ends")
     args = parser.parse_args(argv)
 
     params_file = args.params or default_params_file()
@@ -105,8 +106,9 @@ def main(argv=None) -> int:
                 break
             time.sleep(0.1)
         if sim is not None and sim.returncode == 0:
-            group.echo(f"scenario ended; letting the graph settle for {args.settle:g} s")
-            time.sleep(args.settle)
+            group.echo("scenario ended; waiting for the diagnoser to decide the last window")
+            if not watcher.wait_decided_to_end(args.settle):
+                group.echo(f"the diagnoser did not reach the end of the data within {args.settle:g} s")
     except KeyboardInterrupt:
         interrupted.set()
     finally:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import collections
 import threading
+import time
 from typing import Callable, Optional
 
 import numpy as np
@@ -90,6 +91,18 @@ class GraphWatcher:
         if all_decisions:
             return decisions
         return [d for i, d in enumerate(decisions) if i == 0 or decisions[i - 1].state != d.state]
+
+    def wait_decided_to_end(self, timeout: float, slack: float = 0.06) -> bool:
+        """Wait until a fault_state covers the end of the received signal (within ``slack`` s)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self._lock:
+                done = self._end is not None and self._decisions and \
+                    self._decisions[-1].detected_at >= self._end - slack
+            if done:
+                return True
+            time.sleep(0.05)
+        return False
 
     def signal_end(self) -> Optional[float]:
         with self._lock:

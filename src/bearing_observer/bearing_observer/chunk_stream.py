@@ -74,7 +74,10 @@ class ChunkStream:
             return Verdict(False, reason=f"{self.name}: {problem}")
         rate_changed = self._rate is not None and self._rate != sample_rate
         resync = self._next_index is None or rate_changed
-        reason = ("stream restarted" if restarted else "start of stream") if self._next_index is None else ""
+        reason = ""
+        if self._next_index is None:
+            reason = "stream restarted" if restarted else (
+                "resynchronised after a rejected chunk" if self.counts["rejected"] else "start of stream")
         if not resync and (first_index != self._next_index or abs(stamp - self._next_time) > 0.5 / sample_rate):
             resync = True
             missing = first_index - self._next_index

@@ -65,10 +65,10 @@ class ObserverNode(Node):
 
     def _ensure_observer(self, msg: VibrationChunk) -> bool:
         """Build (or rebuild for a new rate or source) the observer; False when no model fits."""
-        wanted = self.values["model_set"] or default_model_set(msg.source, msg.sample_rate)
-        if self.observer is not None and wanted == self.model_set and self.observer.sample_rate == msg.sample_rate:
-            return True
         try:
+            wanted = self.values["model_set"] or default_model_set(msg.source, msg.sample_rate)
+            if self.observer is not None and wanted == self.model_set and self.observer.sample_rate == msg.sample_rate:
+                return True
             self.observer = FaultObserver.from_model_set(wanted, self.fault.label, self.rpm, msg.sample_rate)
         except (ModelFileError, ValueError) as exc:
             self.observer = None
