@@ -28,6 +28,7 @@ from .state_report import StateChange, evaluate, format_table
 
 EXIT_MISSING = 3
 EXIT_FAILED = 1
+MISSING_SIMULATOR_RUN_S = 5.0
 
 
 def installed_executable(package: str, executable: str) -> pathlib.Path | None:
@@ -96,7 +97,8 @@ def main(argv=None) -> int:
         for spec in runnable:
             group.start(spec.name, node_argv(spec, params_file, args.namespace))
         sim = next((m for m in group.members if m.name == "simulator"), None)
-        deadline = time.monotonic() + args.timeout
+        # Without a simulator nothing ends the scenario: show that the rest starts, then stop.
+        deadline = time.monotonic() + (args.timeout if sim is not None else MISSING_SIMULATOR_RUN_S)
         while time.monotonic() < deadline and not interrupted.is_set():
             if sim is not None and sim.returncode is not None:
                 break
