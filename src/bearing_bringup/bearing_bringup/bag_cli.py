@@ -3,7 +3,7 @@ for machines without ``ros2 bag`` (the PyPI ROS 2 wheels do not include rosbag2)
 
     bearing-bag record [--topics T ...] [--namespace NS] [--storage mcap|sqlite3] [--duration S] --out BAG_DIR
     bearing-bag play BAG_DIR [--rate R] [--clock] [--topics T ...] [--loop] [--delay S]
-                     [--wait-for-subscribers] [--namespace NS]
+                     [--wait-for-subscribers [N]] [--namespace NS]
     bearing-bag info BAG_DIR
     bearing-bag from-mat FILE.mat --sample-rate HZ [--channel X105_DE_time] [--rpm RPM]
                          [--chunk-duration 0.01] [--start-time 0] [--duration S] --out BAG_DIR
@@ -44,8 +44,8 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--loop", "-l", action="store_true", help="repeat until Ctrl-C")
     pl.add_argument("--delay", type=float, default=1.0, metavar="S",
                     help="wait S seconds for subscribers to be discovered before playing (default 1)")
-    pl.add_argument("--wait-for-subscribers", action="store_true",
-                    help="before playing, wait (up to 60 s) until every played topic has a subscriber")
+    pl.add_argument("--wait-for-subscribers", type=int, nargs="?", const=1, default=0, metavar="N",
+                    help="before playing, wait (up to 60 s) until every played topic has N subscribers (default 1)")
     pl.add_argument("--namespace", default=None, help="republish the graph topics under this namespace")
 
     i = sub.add_parser("info", help="topics, types, message counts, duration, storage")

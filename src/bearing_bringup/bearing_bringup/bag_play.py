@@ -69,14 +69,15 @@ def select_connections(reader, topics=None, namespace=None) -> list:
 
 
 def play(bag_dir, rate: float = 1.0, clock: bool = False, topics=None, loop: bool = False,
-         delay: float = 1.0, namespace: Optional[str] = None, wait_for_subscribers: bool = False,
+         delay: float = 1.0, namespace: Optional[str] = None, wait_for_subscribers: int = 0,
          log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)) -> dict:
     """Publish the recording; return the number of messages published per topic.
 
     ``namespace`` republishes the graph's topics under another namespace (``""`` = root)
-    instead of the one they were recorded in.  ``wait_for_subscribers``: before the
-    ``delay``, wait (up to :data:`SUBSCRIBER_TIMEOUT` s) until every played topic has a
-    subscriber, so that nothing is published before the receivers are matched.
+    instead of the one they were recorded in.  ``wait_for_subscribers`` = N > 0: before
+    the ``delay``, wait (up to :data:`SUBSCRIBER_TIMEOUT` s) until every played topic has
+    N matched subscribers, so that nothing is published before the receivers are ready
+    (e.g. 2 for the two observers on ``vibration/drive_end``).
     """
     import rclpy
     from rclpy.duration import Duration
@@ -125,11 +126,12 @@ def play(bag_dir, rate: float = 1.0, clock: bool = False, topics=None, loop: boo
             if wait_for_subscribers:
                 deadline = time.monotonic() + SUBSCRIBER_TIMEOUT
                 while not stop and time.monotonic() < deadline and \
-                        any(p.get_subscription_count() == 0 for p in pubs.values()):
+                        any(p.get_subscription_count() < wait_for_subscribers for p in pubs.values()):
                     executor.spin_once(timeout_sec=0.05)
-                missing = [out_names[t] for t, p in pubs.items() if p.get_subscription_count() == 0]
+                missing = [out_names[t] for t, p in pubs.items() if p.get_subscription_count() < wait_for_subscribers]
                 if missing:
-                    log(f"bearing-bag: no subscriber after {SUBSCRIBER_TIMEOUT:g} s on {', '.join(missing)}; playing anyway")
+                    log(f"bearing-bag: fewer than {wait_for_subscribers} subscribers after "
+                        f"{SUBSCRIBER_TIMEOUT:g} s on {', '.join(missing)}; playing anyway")
                 delay = max(delay, MATCH_SETTLE)
             end = time.monotonic() + max(0.0, delay)
             while not stop and time.monotonic() < end:

@@ -156,10 +156,35 @@ def mat_to_bag(mat_path, out, sample_rate: float, channel: Optional[str] = None,
     x = rec.accel
     if max_duration is not None:
         x = x[: max(1, int(round(max_duration * rec.sample_rate)))]
+    count = write_signal_bag(out, x, rec.sample_rate, rec.rpm, source="cwru",
+                             speed_source="cwru" if rpm is None else "command_line",
+                             chunk_duration=chunk_duration, start_time=start_time, storage=storage,
+                             namespace=namespace)
     fs = rec.sample_rate
+    return MatConversion(str(out), count, int(x.size), fs, float(rec.rpm),
+                         "file" if rpm is None else "command line", x.size / fs)
+
+
+def write_signal_bag(out, samples, sample_rate: float, rpm: float, source: str, speed_source: str = "",
+                     chunk_duration: float = DEFAULT_CHUNK_DURATION, start_time: float = 0.0,
+                     storage: str = "mcap", namespace: str = "", frame_id: str = "drive_end") -> int:
+    """Write a uniformly sampled acceleration signal (m/s²) as the graph's topics; return the chunk count.
+
+    ``vibration/drive_end``: VibrationChunk of ``chunk_duration`` s (the last may be
+    shorter), consecutive ``first_sample_index``, stamp = ``start_time`` + index /
+    ``sample_rate``; ``shaft_speed``: one ShaftSpeed (rad/s) per chunk, same stamp.
+    Log time = stamp.
+    """
+    if not (np.isfinite(chunk_duration) and chunk_duration > 0):
+        raise BagError(f"chunk duration must be positive, got {chunk_duration:g} s")
+    if not (np.isfinite(start_time) and start_time >= 0):
+        raise BagError(f"start time must be >= 0 s, got {start_time:g}")
+    if not (np.isfinite(rpm) and rpm > 0):
+        raise BagError(f"shaft speed must be positive, got {rpm:g} rpm")
+    x = np.asarray(samples, dtype=np.float64)
+    fs = float(sample_rate)
     n_chunk = max(1, int(round(chunk_duration * fs)))
-    omega = rec.rpm * 2.0 * np.pi / 60.0
-    speed_source = "cwru" if rpm is None else "command_line"
+    omega = float(rpm) * 2.0 * np.pi / 60.0
     vib, spd = qualify(namespace, TOPIC_VIBRATION), qualify(namespace, TOPIC_SPEED)
     vib_type, spd_type = GRAPH_TOPICS[TOPIC_VIBRATION].msgtype, GRAPH_TOPICS[TOPIC_SPEED].msgtype
     count = 0
@@ -169,16 +194,14 @@ def mat_to_bag(mat_path, out, sample_rate: float, channel: Optional[str] = None,
         bag.add_topic(vib, vib_type, False, GRAPH_TOPICS[TOPIC_VIBRATION].depth)
         bag.add_topic(spd, spd_type, False, GRAPH_TOPICS[TOPIC_SPEED].depth)
         for i0 in range(0, x.size, n_chunk):
-            t = start_time + i0 / fs
-            stamp = time_msg(ts, t)
+            stamp = time_msg(ts, start_time + i0 / fs)
             log_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
-            chunk = Chunk(header=Header(stamp=stamp, frame_id="drive_end"), sample_rate=float(fs),
-                          first_sample_index=i0, source="cwru",
-                          samples=np.ascontiguousarray(x[i0:i0 + n_chunk], dtype=np.float64))
+            chunk = Chunk(header=Header(stamp=stamp, frame_id=frame_id), sample_rate=fs,
+                          first_sample_index=i0, source=source,
+                          samples=np.ascontiguousarray(x[i0:i0 + n_chunk]))
             bag.write(vib, log_ns, bag.serialize(chunk, vib_type))
-            speed = Speed(header=Header(stamp=stamp, frame_id=""), angular_velocity=float(omega),
-                          source=speed_source)
+            speed = Speed(header=Header(stamp=stamp, frame_id=""), angular_velocity=omega,
+                          source=speed_source or source)
             bag.write(spd, log_ns, bag.serialize(speed, spd_type))
             count += 1
-    return MatConversion(str(out), count, int(x.size), fs, float(rec.rpm),
-                         "file" if rpm is None else "command line", x.size / fs)
+    return count

@@ -1,0 +1,496 @@
+"""Reading rosbag2 recordings of the monitoring graph without rclpy (via ``rosbags``).
+
+A bag is a rosbag2 directory (``metadata.yaml`` plus MCAP or sqlite3 storage) as written
+by ``ros2 bag record`` or ``bearing-bag record`` / ``bearing-bag from-mat``.  Messages are
+decoded with the definitions embedded in the bag itself (ros2msg / ros2idl text, checked
+against the recorded RIHS01 type hashes); bags without embedded definitions fall back to
+the ROS 2 Kilted standard types plus this project's ``bearing_msgs`` definitions.
+
+The graph's topics are relative names; in a bag they appear fully qualified, e.g.
+``/vibration/drive_end`` or ``/machine_3/vibration/drive_end``.  :func:`read_bag` finds a
+topic by its relative name under one namespace (``namespace=None``: the only one present).
+
+Everything here is also what ``bearing-bag`` (package ``bearing_bringup``) builds on:
+the topic table :data:`GRAPH_TOPICS`, the type store with ``bearing_msgs``
+(:func:`project_typestore`) and bag validation (:func:`open_bag`).
+
+Errors are :class:`BagError` (an :class:`~.signal_files.InputError`) with one line meant
+for the user.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+import sys
+from typing import Iterator, NamedTuple, Optional
+
+import numpy as np
+
+from .signal_files import InputError, Recording
+
+#: Interface package of the project; its .msg files give the definitions.
+MSG_PACKAGE = "bearing_msgs"
+
+
+class TopicSpec(NamedTuple):
+    """A topic of the monitoring graph (``CONTRACT.md``, "Topics")."""
+
+    name: str  # relative name ("/diagnostics" is absolute)
+    msgtype: str  # rosbag2 type name, e.g. bearing_msgs/msg/VibrationChunk
+    latched: bool  # reliable + transient local (a late subscriber gets the current value)
+    depth: int  # keep-last depth
+
+
+#: The graph's topics with their types and QoS, in the order ``bearing-bag record`` lists them.
+GRAPH_TOPICS = OrderedDict((t.name, t) for t in (
+    TopicSpec("vibration/drive_end", "bearing_msgs/msg/VibrationChunk", False, 50),
+    TopicSpec("unbalance", "bearing_msgs/msg/VibrationChunk", False, 50),
+    TopicSpec("shaft_speed", "bearing_msgs/msg/ShaftSpeed", False, 10),
+    TopicSpec("sim/truth", "bearing_msgs/msg/FaultState", True, 10),
+    TopicSpec("residual/outer_race", "bearing_msgs/msg/Residual", False, 50),
+    TopicSpec("residual/inner_race", "bearing_msgs/msg/Residual", False, 50),
+    TopicSpec("fault_state", "bearing_msgs/msg/FaultState", True, 10),
+    TopicSpec("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", False, 10),
+))
+
+#: Recorded by default (``/diagnostics`` is for humans; add it with ``--topics`` if wanted).
+DEFAULT_RECORD_TOPICS = tuple(n for n in GRAPH_TOPICS if n != "/diagnostics")
+
+#: Topics :func:`read_bag` decodes.
+TOPIC_VIBRATION = "vibration/drive_end"
+TOPIC_SPEED = "shaft_speed"
+TOPIC_FAULT_STATE = "fault_state"
+TOPIC_TRUTH = "sim/truth"
+
+#: Key in the bag's ``custom_data`` holding the namespace the graph ran in.
+CUSTOM_NAMESPACE = "bearing_bag.namespace"
+
+
+class BagError(InputError):
+    """The path is not a readable rosbag2 recording of the graph (one-line message)."""
+
+
+# ----------------------------------------------------------------------------------------
+# Type store
+
+
+def msg_definition_dirs() -> list:
+    """Directories holding ``bearing_msgs/msg/*.msg``: the installed package's share
+    directory (found beside the importable ``bearing_msgs`` Python package), else the
+    repository's ``msgs/msg``."""
+    dirs = []
+    try:
+        import bearing_msgs  # the generated Python package: .../install/bearing_msgs/lib/python3.11/site-packages
+        pkg = Path(bearing_msgs.__file__).resolve().parent
+        for up in pkg.parents:
+            share = up / "share" / MSG_PACKAGE / "msg"
+            if share.is_dir():
+                dirs.append(share)
+                break
+    except ImportError:
+        pass
+    source = Path(__file__).resolve().parents[3] / "msgs" / "msg"
+    if source.is_dir():
+        dirs.append(source)
+    return dirs
+
+
+@lru_cache(maxsize=1)
+def _project_typedefs() -> dict:
+    from rosbags.typesys import get_types_from_msg
+    for d in msg_definition_dirs():
+        files = sorted(d.glob("*.msg"))
+        if files:
+            typs = {}
+            for f in files:
+                typs.update(get_types_from_msg(f.read_text(), f"{MSG_PACKAGE}/msg/{f.stem}"))
+            return typs
+    raise BagError(f"cannot find the {MSG_PACKAGE} .msg definitions (looked in: "
+                   f"{', '.join(map(str, msg_definition_dirs())) or 'nowhere'}); build ros_ws first")
+
+
+def project_typestore():
+    """A fresh ``rosbags`` type store: ROS 2 Kilted standard types + ``bearing_msgs``.
+
+    ``store.generate_msgdef(t, ros_version=2)`` gives the full ros2msg definition text
+    (with dependencies such as std_msgs/Header) and ``store.hash_rihs01(t)`` the same type
+    hash ROS 2 computes, so bags written with it decode in other tools.
+    """
+    from rosbags.typesys import Stores, get_typestore
+    store = get_typestore(Stores.ROS2_KILTED)
+    store.register(_project_typedefs())
+    return store
+
+
+# ----------------------------------------------------------------------------------------
+# Opening and validating bags
+
+
+def _reader_errors():
+    from rosbags.highlevel import AnyReaderError
+    from rosbags.rosbag2 import ReaderError
+    from rosbags.typesys import TypesysError
+    return (AnyReaderError, ReaderError, TypesysError)
+
+
+def check_bag_dir(path) -> Path:
+    """Raise :class:`BagError` unless ``path`` looks like a complete rosbag2 directory."""
+    p = Path(path)
+    if not p.exists():
+        raise BagError(f"{path}: no such file or directory")
+    if not p.is_dir():
+        raise BagError(f"{path}: not a rosbag2 recording (a rosbag2 recording is a directory with metadata.yaml)")
+    if not (p / "metadata.yaml").is_file():
+        storage = sorted(x.name for x in p.iterdir() if x.suffix in (".mcap", ".db3"))
+        if storage:
+            raise BagError(f"{path}: truncated bag: metadata.yaml is missing beside {', '.join(storage)} "
+                           "(the recorder was killed before it could close the bag)")
+        raise BagError(f"{path}: not a rosbag2 recording (no metadata.yaml)")
+    return p
+
+
+@contextmanager
+def open_bag(path, fallback_typestore: bool = True):
+    """Open a rosbag2 directory with ``rosbags.highlevel.AnyReader``; errors → :class:`BagError`.
+
+    The reader's type store holds the definitions embedded in the bag (checked against
+    their type hashes); a bag without embedded definitions is decoded with
+    :func:`project_typestore` when ``fallback_typestore``.
+    """
+    from rosbags.highlevel import AnyReader
+    p = check_bag_dir(path)
+    errors = _reader_errors()
+    try:
+        reader = AnyReader([p], default_typestore=project_typestore() if fallback_typestore else None)
+        reader.open()
+    except errors as exc:
+        raise BagError(f"{path}: not a readable rosbag2 recording: {_one_line(exc)}") from None
+    except (OSError, ValueError, KeyError, TypeError, AssertionError) as exc:
+        raise BagError(f"{path}: not a readable rosbag2 recording ({exc.__class__.__name__}: "
+                       f"{_one_line(exc)})") from None
+    try:
+        yield reader
+    finally:
+        try:
+            reader.close()
+        except Exception:  # closing a half-read broken file must not hide the real error
+            pass
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(a) for a in exc.args) if exc.args else exc.__class__.__name__
+    return " ".join(text.split()).rstrip(".")
+
+
+def iter_raw(reader, connections) -> Iterator[tuple]:
+    """``(connection, log_time_ns, raw_cdr)`` in log-time order; storage errors → :class:`BagError`.
+
+    A storage file cut short (a crashed recorder, a partial copy) raises here, naming
+    how far it got.
+    """
+    count = 0
+    try:
+        for conn, t, raw in reader.messages(connections=connections):
+            yield conn, t, raw
+            count += 1
+    except _reader_errors() + (OSError, ValueError, KeyError, EOFError, AssertionError) as exc:
+        raise BagError(f"{reader.paths[0]}: bag storage is damaged after {count} messages: "
+                       f"{_one_line(exc)}") from None
+    except Exception as exc:  # mcap / sqlite3 raise their own error types on truncated files
+        raise BagError(f"{reader.paths[0]}: bag storage is damaged after {count} messages "
+                       f"({exc.__class__.__name__}: {_one_line(exc)})") from None
+
+
+def _qualified(namespace: str, relative: str) -> str:
+    if relative.startswith("/"):
+        return relative
+    ns = namespace.strip("/")
+    return f"/{ns}/{relative}" if ns else f"/{relative}"
+
+
+def find_topic(topics, relative: str, namespace: Optional[str] = None) -> Optional[str]:
+    """The recorded name of graph topic ``relative`` among ``topics`` (None if absent).
+
+    With ``namespace`` (e.g. ``"machine_3"`` or ``""`` for the root) the name must be
+    exactly ``/namespace/relative``; without, any namespace is accepted as long as only one
+    recorded topic matches.
+    """
+    names = list(topics)
+    if namespace is not None:
+        want = _qualified(namespace, relative)
+        return want if want in names else None
+    rel = relative.strip("/")
+    matches = [n for n in names if n.strip("/") == rel or n.endswith("/" + rel)]
+    if relative.startswith("/"):
+        matches = [n for n in matches if n == relative]
+    if len(matches) > 1:
+        raise BagError(f"topic {relative!r} is recorded under several namespaces ({', '.join(sorted(matches))}); "
+                       "choose one with --namespace")
+    return matches[0] if matches else None
+
+
+# ----------------------------------------------------------------------------------------
+# Decoded contents
+
+
+def stamp_seconds(stamp) -> float:
+    """builtin_interfaces/Time → float seconds."""
+    return float(stamp.sec) + float(stamp.nanosec) * 1e-9
+
+
+@dataclass
+class Chunk:
+    """One ``VibrationChunk`` (stamp = time of its first sample, s)."""
+
+    stamp: float
+    first_sample_index: int
+    sample_rate: float
+    source: str
+    frame_id: str
+    samples: np.ndarray  # shape (n,), SI units (m/s²)
+    log_time: float  # s, when it was recorded (receive time)
+
+
+@dataclass
+class SpeedSample:
+    """One ``ShaftSpeed``."""
+
+    stamp: float
+    angular_velocity: float  # rad/s
+    source: str
+    log_time: float
+
+
+@dataclass
+class StateSample:
+    """One ``FaultState`` (from ``fault_state`` or ``sim/truth``)."""
+
+    stamp: float  # decision time (signal time)
+    state: int  # FaultState integer
+    confidence: float
+    onset: float  # s, estimated start of the state
+    scores: dict
+    model_set: str
+    detail: str
+    log_time: float
+
+
+@dataclass
+class BagContents:
+    """What :func:`read_bag` decoded; every list is in recording (log-time) order."""
+
+    path: str
+    storage: str
+    namespace: str  # namespace the topics were found under ("" = root)
+    topics: dict  # recorded name -> (type, message count)
+    chunks: list = field(default_factory=list)
+    speeds: list = field(default_factory=list)
+    fault_states: list = field(default_factory=list)
+    truth: list = field(default_factory=list)
+
+    @property
+    def rpm(self) -> Optional[float]:
+        """Median recorded shaft speed (rev/min), or None."""
+        if not self.speeds:
+            return None
+        return float(np.median([s.angular_velocity for s in self.speeds])) * 60.0 / (2.0 * np.pi)
+
+
+def _state_sample(msg, log_time: float) -> StateSample:
+    scores = {str(k): float(v) for k, v in zip(msg.hypotheses, np.asarray(msg.scores).tolist())}
+    return StateSample(stamp_seconds(msg.header.stamp), int(msg.state), float(msg.confidence),
+                       stamp_seconds(msg.onset), scores, str(msg.model_set), str(msg.detail), log_time)
+
+
+def bag_storage(path) -> str:
+    """The storage identifier in ``metadata.yaml`` (``mcap``, ``sqlite3``), or ``""``."""
+    try:
+        from ruamel.yaml import YAML
+        meta = YAML(typ="safe").load((Path(path) / "metadata.yaml").read_text())
+        return str(meta["rosbag2_bagfile_information"].get("storage_identifier", ""))
+    except Exception:
+        return ""
+
+
+def bag_namespace_hint(path) -> Optional[str]:
+    """The namespace ``bearing-bag`` stored in the bag's custom_data, if any."""
+    try:
+        from ruamel.yaml import YAML
+        meta = YAML(typ="safe").load((Path(path) / "metadata.yaml").read_text())
+        custom = meta["rosbag2_bagfile_information"].get("custom_data") or {}
+        ns = custom.get(CUSTOM_NAMESPACE)
+        return None if ns is None else str(ns)
+    except Exception:
+        return None
+
+
+EXPECTED_TYPES = {TOPIC_VIBRATION: "bearing_msgs/msg/VibrationChunk",
+                  TOPIC_SPEED: "bearing_msgs/msg/ShaftSpeed",
+                  TOPIC_FAULT_STATE: "bearing_msgs/msg/FaultState",
+                  TOPIC_TRUTH: "bearing_msgs/msg/FaultState"}
+
+
+def read_bag(path, namespace: Optional[str] = None, vibration_topic: str = TOPIC_VIBRATION) -> BagContents:
+    """Decode the graph's recorded vibration, shaft speed and fault states.
+
+    Parameters
+    ----------
+    path : str or Path
+        rosbag2 directory.
+    namespace : str, optional
+        Namespace of the machine's topics (``""`` = root); default: the only one present.
+    vibration_topic : str
+        Relative name of the VibrationChunk topic to read.
+
+    Returns
+    -------
+    BagContents
+        ``chunks`` (VibrationChunk of ``vibration_topic``), ``speeds`` (``shaft_speed``),
+        ``fault_states`` (the diagnoser's ``fault_state``) and ``truth`` (``sim/truth``).
+
+    Raises
+    ------
+    BagError
+        Not a bag, truncated or damaged, no vibration topic, or a topic of the wrong type.
+    """
+    wanted = {vibration_topic: EXPECTED_TYPES[TOPIC_VIBRATION], TOPIC_SPEED: EXPECTED_TYPES[TOPIC_SPEED],
+              TOPIC_FAULT_STATE: EXPECTED_TYPES[TOPIC_FAULT_STATE], TOPIC_TRUTH: EXPECTED_TYPES[TOPIC_TRUTH]}
+    with open_bag(path) as reader:
+        recorded = {c.topic: c.msgtype for c in reader.connections}
+        counts: dict = {}
+        for c in reader.connections:
+            counts[c.topic] = (c.msgtype, counts.get(c.topic, (None, 0))[1] + c.msgcount)
+        if namespace is None and find_topic(recorded, vibration_topic) is None:
+            namespace = bag_namespace_hint(path)
+        names = {}
+        for rel, typ in wanted.items():
+            name = find_topic(recorded, rel, namespace)
+            if name is None:
+                continue
+            if recorded[name] != typ:
+                raise BagError(f"{path}: topic {name} has type {recorded[name]}, expected {typ}")
+            names[name] = rel
+        vib_name = next((n for n, r in names.items() if r == vibration_topic), None)
+        if vib_name is None:
+            have = ", ".join(f"{t} ({recorded[t]})" for t in sorted(recorded)) or "no topics"
+            raise BagError(f"{path}: no {vibration_topic} topic"
+                           + (f" under namespace /{namespace.strip('/')}" if namespace else "")
+                           + f" in the bag (it has {have})")
+        ns = vib_name[: -len(vibration_topic)].strip("/") if not vibration_topic.startswith("/") else ""
+        out = BagContents(str(path), bag_storage(path), ns, counts)
+        conns = [c for c in reader.connections if c.topic in names]
+        for conn, t, raw in iter_raw(reader, conns):
+            rel = names[conn.topic]
+            try:
+                msg = reader.deserialize(raw, conn.msgtype)
+            except Exception as exc:
+                raise BagError(f"{path}: cannot decode a {conn.msgtype} message on {conn.topic}: "
+                               f"{_one_line(exc)}") from None
+            log_time = t * 1e-9
+            if rel == vibration_topic:
+                out.chunks.append(Chunk(stamp_seconds(msg.header.stamp), int(msg.first_sample_index),
+                                        float(msg.sample_rate), str(msg.source), str(msg.header.frame_id),
+                                        np.asarray(msg.samples, dtype=float), log_time))
+            elif rel == TOPIC_SPEED:
+                out.speeds.append(SpeedSample(stamp_seconds(msg.header.stamp), float(msg.angular_velocity),
+                                              str(msg.source), log_time))
+            elif rel == TOPIC_FAULT_STATE:
+                out.fault_states.append(_state_sample(msg, log_time))
+            else:
+                out.truth.append(_state_sample(msg, log_time))
+    return out
+
+
+# ----------------------------------------------------------------------------------------
+# Bag → Recording (for bearing-diagnose)
+
+
+@dataclass
+class Stream:
+    """The vibration chunks joined into one uniformly sampled signal."""
+
+    samples: np.ndarray  # (n,), m/s²
+    sample_rate: float  # Hz
+    start_time: float  # s, stamp of the first sample
+    first_sample_index: int
+    source: str
+    gaps: list  # (first missing sample index, number of missing samples), filled with zeros
+    duplicates: int  # chunks dropped because their samples were already present
+
+
+def join_chunks(chunks: list) -> Stream:
+    """Join chunks by ``first_sample_index`` (sorted; duplicates dropped; gaps zero-filled).
+
+    Raises :class:`BagError` when the chunks disagree on sample rate or source (several
+    streams mixed on one topic).
+    """
+    if not chunks:
+        raise BagError("no vibration chunks in the bag")
+    rates = {c.sample_rate for c in chunks}
+    if len(rates) > 1:
+        listed = ", ".join(f"{r:g}" for r in sorted(rates))
+        raise BagError(f"vibration chunks have different sample rates ({listed} Hz)")
+    rate = rates.pop()
+    if not (np.isfinite(rate) and rate > 0):
+        raise BagError(f"vibration chunks carry an invalid sample rate {rate!r}")
+    sources = {c.source for c in chunks}
+    if len(sources) > 1:
+        raise BagError(f"vibration chunks come from several sources ({', '.join(sorted(sources))})")
+    ordered = sorted(chunks, key=lambda c: c.first_sample_index)
+    first = ordered[0]
+    parts, gaps, dups = [], [], 0
+    nxt = first.first_sample_index
+    for c in ordered:
+        n = c.samples.size
+        if c.first_sample_index + n <= nxt:
+            dups += 1
+            continue
+        if c.first_sample_index > nxt:
+            missing = c.first_sample_index - nxt
+            gaps.append((nxt, missing))
+            parts.append(np.zeros(missing))
+            nxt = c.first_sample_index
+        parts.append(c.samples[nxt - c.first_sample_index:])
+        nxt = c.first_sample_index + n
+    return Stream(np.concatenate(parts), rate, first.stamp, first.first_sample_index, first.source, gaps, dups)
+
+
+def truth_per_sample(truth: list, start_time: float, n: int, rate: float) -> Optional[np.ndarray]:
+    """Per-sample true state from the recorded ``sim/truth`` changes (state from its onset on)."""
+    if not truth:
+        return None
+    t = start_time + np.arange(n) / rate
+    out = np.zeros(n, dtype=int)
+    for s in sorted(truth, key=lambda s: s.onset):
+        out[t >= s.onset - 0.5 / rate] = s.state
+    return out
+
+
+def load_bag(path, channel: Optional[str] = None, namespace: Optional[str] = None) -> Recording:
+    """A rosbag2 recording of the graph as a :class:`~.signal_files.Recording` (the hook of
+    ``signal_files.load_bag`` / ``bearing-diagnose BAG_DIR``).
+
+    ``channel`` is the relative VibrationChunk topic (default ``vibration/drive_end``).
+    The chunks are joined by ``first_sample_index`` (gaps zero-filled, reported on
+    stderr); ``source`` is the chunks' source field (picks the model set), ``rpm`` the
+    median of ``shaft_speed``, ``truth`` per sample from ``sim/truth`` when recorded.
+    The stamp of the first sample is kept as ``recording.start_time`` (s).
+    """
+    contents = read_bag(path, namespace=namespace, vibration_topic=channel or TOPIC_VIBRATION)
+    try:
+        stream = join_chunks(contents.chunks)
+    except BagError as exc:
+        raise BagError(f"{path}: {exc}") from None
+    if stream.gaps:
+        missing = sum(n for _i, n in stream.gaps)
+        print(f"bearing-diagnose: {path}: {len(stream.gaps)} gaps in vibration/drive_end "
+              f"({missing} samples, {missing / stream.sample_rate:.3f} s) filled with zeros", file=sys.stderr)
+    truth = truth_per_sample(contents.truth, stream.start_time, stream.samples.size, stream.sample_rate)
+    rec = Recording(stream.samples, stream.sample_rate, contents.rpm, stream.source, truth,
+                    channel or TOPIC_VIBRATION, str(path))
+    rec.start_time = stream.start_time
+    return rec

@@ -1,0 +1,169 @@
+"""bearing-bag record / play through real DDS (separate processes, isolated domain)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from bearing_msgs.msg import FaultState, VibrationChunk
+from publish_probe import known_chunk
+from ros_harness import REPO_ROOT
+
+from bearing_bringup.bag_write import BagWriter
+from bearing_diagnoser.bag_files import read_bag
+
+pytestmark = pytest.mark.ros
+
+BAG_CLI = [sys.executable, "-m", "bearing_bringup.bag_cli"]
+LATCHED = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def stop_member(member, sig, timeout=15.0) -> int:
+    """Send ``sig`` to a member's process group and wait for it to exit."""
+    os.killpg(member.process.pid, sig)
+    return member.process.wait(timeout=timeout)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_record_a_publisher_and_stop_by_signal(ros_graph, tmp_path, sig):
+    """A recording stopped by Ctrl-C / SIGTERM is a complete bag with the messages intact,
+    including a transient-local fault_state published before the recorder started."""
+    latched = FaultState()
+    latched.header.stamp.sec = 7
+    latched.state = FaultState.INNER_RACE
+    latched.onset.sec = 6
+    latched.hypotheses, latched.scores = ["inner_race"], [3.5]
+    latched_pub = ros_graph.publisher("fault_state", FaultState, LATCHED)  # kept alive: it holds the sample
+    latched_pub.publish(latched)
+
+    seen = ros_graph.subscribe("vibration/drive_end", VibrationChunk)
+    probe = REPO_ROOT / "tests" / "ros" / "publish_probe.py"
+    ros_graph.start("", "", name="publish_probe", argv=[sys.executable, str(probe)])
+    ros_graph.wait_until(lambda: len(seen) >= 2, timeout=30.0, what="the probe publishing")
+
+    bag = tmp_path / "rec"
+    t_start = time.time_ns()
+    recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + ["record", "--out", str(bag)])
+    for topic in ("/vibration/drive_end", "/fault_state"):
+        ros_graph.wait_until(lambda: any(f"first message on {topic}" in line for line in recorder.lines),
+                             timeout=30.0, what=f"the recorder to receive {topic}")
+    n0 = len(seen)
+    ros_graph.wait_until(lambda: len(seen) >= n0 + 20, timeout=30.0, what="20 more probe messages (1 s)")
+    assert stop_member(recorder, sig) == 0, ros_graph.output()
+    t_end = time.time_ns()
+    assert any(("SIGINT" if sig == signal.SIGINT else "SIGTERM") in line for line in recorder.lines), recorder.lines
+
+    contents = read_bag(bag)
+    assert len(contents.chunks) >= 10, ros_graph.output()
+    want = known_chunk()
+    for c in contents.chunks:
+        assert c.stamp == pytest.approx(12.345, abs=1e-12)  # header stamp kept, not the receive time
+        assert c.frame_id == "drive_end" and c.source == "probe" and c.first_sample_index == 480
+        assert list(c.samples) == list(want.samples)
+    log_ns = [round(c.log_time * 1e9) for c in contents.chunks]
+    assert log_ns == sorted(log_ns)
+    assert t_start - 10**9 <= log_ns[0] and log_ns[-1] <= t_end + 10**9  # log time = receive time
+    (state,) = contents.fault_states
+    assert state.state == FaultState.INNER_RACE and state.stamp == 7.0 and state.scores == {"inner_race": 3.5}
+
+
+def test_record_duration_and_namespace(ros_graph, tmp_path):
+    pub = ros_graph.publisher("/rig_a/vibration/drive_end", VibrationChunk, QoSProfile(depth=50))
+    bag = tmp_path / "ns"
+    recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + [
+        "record", "--namespace", "rig_a", "--topics", "vibration/drive_end", "--duration", "3",
+        "--storage", "sqlite3", "--out", str(bag)])
+    ros_graph.wait_until(lambda: any("recording" in line for line in recorder.lines), timeout=30.0,
+                         what="the recorder to start")
+    time.sleep(1.0)  # discovery
+    msg = known_chunk()
+    while recorder.returncode is None:
+        pub.publish(msg)
+        msg.first_sample_index += 5
+        time.sleep(0.05)
+    assert recorder.returncode == 0, ros_graph.output()
+    contents = read_bag(bag)
+    assert contents.storage == "sqlite3" and contents.namespace == "rig_a"
+    assert len(contents.chunks) >= 5
+    idx = [c.first_sample_index for c in contents.chunks]
+    assert idx == sorted(idx) and np.all(np.diff(idx) % 5 == 0)
+
+
+def write_play_bag(path, n=21, dt=0.05):
+    """Synthetic bag: n chunks every dt s of log time (stamps 5 s later) + a latched fault_state."""
+    with BagWriter(path) as bag:
+        store = bag.typestore
+        T = store.types
+        bag.add_topic("/vibration/drive_end", "bearing_msgs/msg/VibrationChunk", False, 50)
+        bag.add_topic("/fault_state", "bearing_msgs/msg/FaultState", True, 10)
+        t0 = 1_000_000_000_000
+        for k in range(n):
+            t = t0 + round(k * dt * 1e9)
+            sec, nsec = divmod(t + 5 * 10**9, 10**9)
+            msg = T["bearing_msgs/msg/VibrationChunk"](
+                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec),
+                                                frame_id="drive_end"),
+                sample_rate=1000.0, first_sample_index=50 * k, source="simulator",
+                samples=np.full(50, float(k)))
+            bag.write("/vibration/drive_end", t, bag.serialize(msg, "bearing_msgs/msg/VibrationChunk"))
+        state = T["bearing_msgs/msg/FaultState"](
+            header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=1, nanosec=0), frame_id=""),
+            state=1, confidence=0.9, onset=T["builtin_interfaces/msg/Time"](sec=0, nanosec=500), hypotheses=[],
+            scores=np.zeros(0), model_set="sim_48k", detail="")
+        bag.write("/fault_state", t0 + round((n - 1) * dt * 1e9), bag.serialize(state, "bearing_msgs/msg/FaultState"))
+    return t0, n, dt
+
+
+def test_play_publishes_in_order_at_rate_with_clock(ros_graph, tmp_path):
+    from rosgraph_msgs.msg import Clock
+    t0, n, dt = write_play_bag(tmp_path / "play")
+    chunks, clocks, lock = [], [], threading.Lock()
+
+    def on_chunk(msg):
+        with lock:
+            stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+            chunks.append((time.monotonic(), msg.first_sample_index, stamp))
+
+    def on_clock(msg):
+        with lock:
+            clocks.append((time.monotonic(), msg.clock.sec * 10**9 + msg.clock.nanosec))
+
+    ros_graph.node.create_subscription(VibrationChunk, "vibration/drive_end", on_chunk, QoSProfile(depth=1000))
+    ros_graph.node.create_subscription(Clock, "/clock", on_clock, QoSProfile(depth=1000))
+    states = ros_graph.subscribe("fault_state", FaultState, LATCHED)
+    rate = 2.0
+    player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
+        "play", str(tmp_path / "play"), "--rate", str(rate), "--clock", "--wait-for-subscribers"])
+    ros_graph.wait_until(lambda: len(chunks) >= n and len(states) >= 1, timeout=30.0,
+                         what=f"{n} chunks and the fault_state (got {len(chunks)} and {len(states)})")
+    ros_graph.wait_until(lambda: player.returncode is not None, timeout=15.0, what="the player to finish")
+    assert player.returncode == 0, ros_graph.output()
+    with lock:
+        got, clk = list(chunks), list(clocks)
+    assert [i for _t, i, _s in got] == [50 * k for k in range(n)]  # all, in order
+    assert [s for _t, _i, s in got] == [t0 + 5 * 10**9 + round(k * dt * 1e9) for k in range(n)]  # stamps intact
+    span = got[-1][0] - got[0][0]
+    expected = (n - 1) * dt / rate  # 0.5 s
+    assert expected * 0.8 < span < expected + 0.3, span
+    assert states[0].state == 1 and states[0].confidence == 0.9
+    # /clock: recording time, non-decreasing, covering the recording
+    values = [v for _t, v in clk]
+    last = t0 + round((n - 1) * dt * 1e9)
+    assert len(values) >= 10 and values == sorted(values)
+    assert t0 <= values[0] < t0 + 10**8 and values[-1] == last
+
+
+def test_play_of_a_bad_bag_fails_with_one_line(ros_graph, tmp_path):
+    (tmp_path / "nobag").mkdir()
+    player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + ["play", str(tmp_path / "nobag")])
+    ros_graph.wait_until(lambda: player.returncode is not None, timeout=30.0, what="the player to fail")
+    assert player.returncode == 2
+    errors = [line for line in player.lines if line.strip()]
+    assert len(errors) == 1 and errors[0].startswith("bearing-bag: error:") and "no metadata.yaml" in errors[0]

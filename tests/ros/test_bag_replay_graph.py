@@ -1,0 +1,165 @@
+"""Record a live OR-IR run of the whole graph, replay it into fresh observers + diagnoser,
+and diagnose the bag offline: all three must tell the same story.
+
+1. simulator (scenario or-ir) → OR/IR observers → diagnoser, recorded by ``bearing-bag record``;
+2. the bag's ``vibration/drive_end`` + ``shaft_speed`` played by ``bearing-bag play`` into
+   fresh observer and diagnoser processes: same fault_state sequence and onsets;
+3. ``bearing-diagnose BAG_DIR``: same states in the same order, onsets close to the live ones.
+
+Timing in the graph comes from header stamps and sample indices only, so the replay must
+reproduce the live decisions exactly (up to a chunk); the offline run uses the same cores.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from bearing_msgs.msg import FaultState
+from ros_harness import INSTALL
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+BAG_CLI = [sys.executable, "-m", "bearing_bringup.bag_cli"]
+LATCHED_ALL = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+QUIET_S = 2.0  # s without a new fault_state: the diagnoser has caught up
+NODES = (("bearing_sim", "simulator", "bearing_sim.node"),
+         ("bearing_observer", "observer", "bearing_observer.node"),
+         ("bearing_diagnoser", "diagnoser", "bearing_diagnoser.node"))
+STATE_CODES = {"normal": 0, "outer_race": 1, "inner_race": 2, "ball": 3, "unknown": 4}
+SEGMENT = 0.5  # s per scenario segment: long enough for the decision windows
+ONSET_TOL_REPLAY = 0.011  # s: one 10 ms chunk
+ONSET_TOL_OFFLINE = 0.05  # s
+
+
+def _missing_nodes() -> list:
+    missing = []
+    for package, exe, module in NODES:
+        if not (INSTALL / package / "lib" / package / exe).exists():
+            missing.append(f"{package}/{exe} (not built)")
+            continue
+        try:
+            importlib.import_module(module)
+        except Exception as exc:  # being written: ImportError, NotImplementedError, ...
+            missing.append(f"{module} ({exc.__class__.__name__}: {exc})")
+    return missing
+
+
+@pytest.fixture
+def graph_nodes():
+    missing = _missing_nodes()
+    if missing:
+        pytest.skip("graph nodes not available yet: " + "; ".join(missing))
+
+
+def params_file():
+    from bearing_bringup.graph import source_config_path
+    return source_config_path()
+
+
+def transitions(states) -> list:
+    """[(state, onset s)] at each change of state (consecutive repeats dropped)."""
+    out = []
+    for s in states:
+        if not out or out[-1][0] != s[0]:
+            out.append(s)
+    return out
+
+
+def live_states(msgs) -> list:
+    return transitions([(int(m.state), m.onset.sec + m.onset.nanosec * 1e-9) for m in msgs])
+
+
+def wait_quiet(ros_graph, received: list, what: str, quiet: float = QUIET_S, timeout: float = 60.0):
+    """Wait until ``received`` has messages and no new one arrived for ``quiet`` seconds
+    (the nodes may lag behind real time on a loaded machine)."""
+    state = {"n": -1, "since": time.monotonic()}
+
+    def settled():
+        if len(received) != state["n"]:
+            state["n"], state["since"] = len(received), time.monotonic()
+        return state["n"] > 0 and time.monotonic() - state["since"] >= quiet
+
+    ros_graph.wait_until(settled, timeout, what)
+
+
+def start_pipeline(ros_graph, suffix=""):
+    """OR and IR observers plus the diagnoser, with the graph's parameters."""
+    pf = params_file()
+    for name in ("or_observer", "ir_observer"):
+        ros_graph.start("bearing_observer", "observer", name=name, params_file=pf)
+    ros_graph.start("bearing_diagnoser", "diagnoser", name="diagnoser", params_file=pf)
+
+
+def stop(member, timeout=15.0):
+    if member.returncode is None:
+        os.killpg(member.process.pid, signal.SIGINT)
+    return member.process.wait(timeout=timeout)
+
+
+def test_live_run_replay_and_offline_agree(ros_graph, tmp_path, graph_nodes):
+    bag = tmp_path / "or_ir"
+    # 1. live run, recorded
+    recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + ["record", "--out", str(bag)])
+    ros_graph.wait_until(lambda: any("recording" in line for line in recorder.lines), 30.0, "the recorder to start")
+    start_pipeline(ros_graph)
+    live = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
+    sim = ros_graph.start("bearing_sim", "simulator", name="simulator", params_file=params_file(),
+                          params={"scenario": "or-ir", "segment_duration": SEGMENT, "wait_for_subscribers": 3,
+                                  "linger": 2.0})
+    ros_graph.wait_until(lambda: sim.returncode is not None, 120.0, "the simulator to finish the scenario")
+    assert sim.returncode == 0, ros_graph.output()
+    wait_quiet(ros_graph, live, "the diagnoser to publish its last decision")
+    assert stop(recorder) == 0, ros_graph.output()
+    for member in ros_graph.processes.members:
+        stop(member)
+
+    from bearing_diagnoser.bag_files import read_bag
+    contents = read_bag(bag)
+    assert contents.chunks and contents.truth, "bag lacks vibration or sim/truth"
+    recorded = transitions([(s.state, s.onset) for s in contents.fault_states])
+    truth = transitions([(s.state, s.onset) for s in contents.truth])
+    assert [s for s, _ in recorded][-1] == FaultState.INNER_RACE, (recorded, ros_graph.output())
+    assert FaultState.OUTER_RACE in [s for s, _ in recorded], recorded
+    assert [s for s, _ in truth][-2:] == [FaultState.OUTER_RACE, FaultState.INNER_RACE], truth
+
+    # 2. replay into fresh observers + diagnoser
+    replayed = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
+    start_pipeline(ros_graph)
+    player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
+        "play", str(bag), "--topics", "vibration/drive_end", "shaft_speed",
+        "--wait-for-subscribers", "2", "--rate", "1"])  # 2: both observers matched before the first chunk
+    ros_graph.wait_until(lambda: player.returncode is not None, 120.0, "the replay to finish")
+    assert player.returncode == 0, ros_graph.output()
+    wait_quiet(ros_graph, replayed, "the replayed diagnosis to settle")
+    again = live_states(replayed)
+    assert [s for s, _ in again] == [s for s, _ in recorded], (again, recorded)
+    for (_, t_live), (_, t_replay) in zip(recorded, again):
+        assert abs(t_live - t_replay) <= ONSET_TOL_REPLAY, (recorded, again)
+
+    # 3. offline: bearing-diagnose BAG_DIR
+    exe = INSTALL / "bearing_diagnoser" / "lib" / "bearing_diagnoser" / "bearing-diagnose"
+    inline = "import sys; from bearing_diagnoser.diagnose_cli import main; sys.exit(main())"
+    argv = [str(exe)] if exe.exists() else [sys.executable, "-c", inline]
+    run = subprocess.run(argv + [str(bag)], capture_output=True, text=True, timeout=300, env=ros_graph.env)
+    if run.returncode != 0 and ("not supported yet" in run.stderr or "not available" in run.stderr):
+        pytest.skip("bearing-diagnose does not read bags yet (signal_files.load_bag → bag_files.load_bag): "
+                    + run.stderr.strip())
+    assert run.returncode == 0, run.stderr
+    segments = [json.loads(line) for line in run.stdout.splitlines() if line.strip()]
+    t0 = contents.chunks[0].stamp  # segment times are relative to the first sample
+    offline = transitions([(STATE_CODES[s["state"]], s["start"] + t0) for s in segments])
+    assert [s for s, _ in offline] == [s for s, _ in recorded], (offline, recorded, run.stderr)
+    for (_, t_live), (_, t_off) in list(zip(recorded, offline))[1:]:
+        assert abs(t_live - t_off) <= ONSET_TOL_OFFLINE, (
+            f"onsets differ between the live graph and bearing-diagnose on its recording: live {recorded}, "
+            f"offline {offline}, truth {truth}\n{run.stderr}")

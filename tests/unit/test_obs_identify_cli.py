@@ -1,0 +1,46 @@
+"""The bearing-identify command line (identify_cli.main)."""
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from bearing_observer.hw_model import load_model_set
+from bearing_observer.identify_cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def cwru_dir():
+    d = Path(os.environ.get("BEARING_CWRU_DIR", REPO.parent / "shared" / "data" / "cwru"))
+    return d if (d / "130_OR007at6_0hp_DE12k.mat").is_file() else None
+
+
+def test_bad_arguments(tmp_path, capsys):
+    assert main(["--source", "x.mat", "--sample-rate", "12000", "--model-set", "t",
+                 "--out", str(tmp_path)]) == 2
+    assert "needs --fault" in capsys.readouterr().err
+    assert main(["--source", "x.mat", "--fault", "outer_race", "--sample-rate", "12000",
+                 "--model-set", "t", "--out", str(tmp_path)]) == 1
+    assert "no such file" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["--source", "sim", "--model-set", "t"])  # --sample-rate missing
+
+
+@pytest.mark.skipif(cwru_dir() is None, reason="CWRU records not found in ../shared/data/cwru "
+                    "beside the repository (or $BEARING_CWRU_DIR)")
+def test_identifies_cwru_set_with_provenance(tmp_path, capsys):
+    d = cwru_dir()
+    rc = main(["--source", f"outer_race={d / '130_OR007at6_0hp_DE12k.mat'}",
+               "--source", f"inner_race={d / '105_IR007_0hp_DE12k.mat'}",
+               "--sample-rate", "12000", "--orders", "6", "6", "0", "--max-seconds", "1.0",
+               "--model-set", "tiny", "--out", str(tmp_path)])
+    assert rc == 0
+    lines = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+    assert [x["fault"] for x in lines] == ["outer_race", "inner_race"]
+    models = load_model_set("tiny", sample_rate=12000.0, root=tmp_path)
+    prov = models["outer_race"].provenance
+    assert prov["file"] == "130_OR007at6_0hp_DE12k.mat" and len(prov["sha256"]) == 64
+    assert prov["command"].startswith("bearing-identify --source outer_race=")
+    assert models["outer_race"].nb == 6
