@@ -141,7 +141,18 @@ def colcon_build() -> None:
                PATH=f"{VENV / 'bin'}{os.pathsep}{env.get('PATH', '')}")
     run("colcon", [str(VENV / "bin" / "colcon"), "build", "--event-handlers", "console_direct-"],
         env=env, cwd=WS)
+    drop_numba_caches()
     mark("colcon", key)
+
+
+def drop_numba_caches() -> None:
+    """Delete numba's on-disk caches in the install space after a rebuild.
+
+    numba keys a cached function on its own source file only, so a cached
+    integrator would keep calling an old right-hand side from another module.
+    """
+    for path in (WS / "install").rglob("__pycache__/*.nb[ic]"):
+        path.unlink()
 
 
 def link_workspace() -> None:

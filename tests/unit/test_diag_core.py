@@ -212,3 +212,21 @@ def test_segments_are_maximal_runs_with_contiguous_times():
     for seg, change in zip(segs[1:], (0.3, 0.6)):
         assert change <= seg.detected_at <= change + 0.05
     assert segments_from_decisions([], 1.0, "x") == []
+
+
+def test_a_gap_in_a_stream_skips_the_windows_it_touches_and_decisions_resume():
+    rng = np.random.default_rng(10)
+    y = burst_train(0.6, FS, BPFO, amplitude=10.0, rng=rng) + noise(0.6)
+    dg = Diagnoser(config_for("sim_48k"))
+    out = []
+    lost = (20160, 20640)  # two 480-sample chunks lost on both streams
+    for i in range(0, y.size, 480):
+        if i in lost:
+            continue
+        for h, f in ((O, BPFO), (I, BPFI)):
+            out += dg.update(h, i, FS, y[i:i + 480], None, None, f)
+    out += dg.flush()
+    gap = (20160 / FS, 21120 / FS)
+    assert not any(d.window_start < gap[1] - 1e-9 and d.window_end > gap[0] + 1e-9 for d in out)
+    assert any(d.window_start >= gap[1] - 1e-9 for d in out)
+    assert out[-1].time > 0.55 and all(d.state == O for d in out)

@@ -59,7 +59,7 @@ from bearing_sim.fault_states import FaultState
 
 from .bearing_lines import decoy_frequencies
 from .periodicity import (EnergyEnvelope, cfar_periodicity, cfar_ses, explain_away, impact_phase_mask,
-                           envelope_decimation, period_grid, train_correlation)
+                           period_grid, train_correlation)
 
 HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE)
 

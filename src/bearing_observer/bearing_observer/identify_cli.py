@@ -6,7 +6,7 @@ Examples (each reproduces one shipped model set)::
     bearing-identify --source sim --sample-rate 12000 --mode series --model-set sim_12k
     bearing-identify --source outer_race=../shared/data/cwru/130_OR007at6_0hp_DE12k.mat \\
                      --source inner_race=../shared/data/cwru/105_IR007_0hp_DE12k.mat \\
-                     --sample-rate 12000 --model-set cwru_de_6205
+                     --sample-rate 12000 --orders 6 6 0 --max-seconds 2 --model-set cwru_de_6205
 
 ``--source sim`` simulates each fault (``bearing_sim.simulator``, noise off, 1800 rpm by
 default) for ``--duration`` seconds. ``--source FILE.mat --fault F`` reads a CWRU-style

@@ -405,13 +405,13 @@ class FaultObserver:
         return self._gains.copy()
 
     # ------------------------------------------------------------------------------------
-    def _trains(self, n: int, n_start: int):
+    def _trains(self, n: int, n_start: int, plain_only: bool = False):
         """Unit plain train and regressor trains for ``n`` samples from absolute sample
         ``n_start`` (impact times from the speed anchor: independent of block boundaries)."""
         fs = self.sample_rate
         ph = TWO_PI * (self._psi_base - self._phase_c)
         i0 = int(n_start - self._n_base)
-        if self.model.modulated:
+        if self.model.modulated and not plain_only:
             comps = modulated_train_components(n, fs, self._freq, ph, start_index=i0,
                                                shaft_frequency=self._fr,
                                                shaft_phase=TWO_PI * self._chi_base,
@@ -461,7 +461,8 @@ class FaultObserver:
         n_bins = int(min(1024, max(16, round(2 * period))))
         # fault cycle position of the window's samples (from the speed anchor; exact while
         # the speed is constant over the window)
-        psi = self._cycles(np.arange(self._n - z.size, self._n))[0]
+        t = np.arange(self._n - z.size - self._n_base, self._n - self._n_base) / self.sample_rate
+        psi = np.mod(self._psi_base + self._freq * t, 1.0)
         idx = np.minimum((psi * n_bins).astype(np.int64), n_bins - 1)
         prof = np.bincount(idx, weights=z * z, minlength=n_bins)
         cnt = np.bincount(idx, minlength=n_bins)
@@ -494,8 +495,8 @@ class FaultObserver:
         n = y.size
         g = self.model.output_nonlinearity
         z_t = g.inverse(y)
-        if self.drive_mode == "off":
-            unit = self._trains(n, self._n)[0]
+        if self.drive_mode == "off" or not np.any(self._gains):
+            unit = self._trains(n, self._n, plain_only=True)[0]
             u = np.zeros(n)
         else:
             unit, comps = self._trains(n, self._n)

@@ -35,6 +35,14 @@ class MonotonePiecewiseLinear:
         self.y = y
         self._slope_lo = (y[1] - y[0]) / (x[1] - x[0])
         self._slope_hi = (y[-1] - y[-2]) / (x[-1] - x[-2])
+        # Tables extended linearly far beyond the breakpoints (1e6 spans each side), so one
+        # np.interp pass evaluates f and f^-1 there; only inputs beyond them (absurd for
+        # accelerations) take the slower masked path.
+        span_x = x[-1] - x[0]
+        ext = 1e6
+        self._xe = np.concatenate([[x[0] - ext * span_x], x, [x[-1] + ext * span_x]])
+        self._ye = np.concatenate([[y[0] - ext * span_x * self._slope_lo], y,
+                                   [y[-1] + ext * span_x * self._slope_hi]])
 
     @classmethod
     def identity(cls, scale: float = 1.0) -> "MonotonePiecewiseLinear":
@@ -61,10 +69,16 @@ class MonotonePiecewiseLinear:
 
     def __call__(self, v):
         """Evaluate ``g(v)`` (vectorised, any shape)."""
+        v = np.asarray(v, dtype=float)
+        if v.size and self._xe[0] < v.min() and v.max() < self._xe[-1]:
+            return np.interp(v, self._xe, self._ye)
         return self._eval(self.x, self.y, self._slope_lo, self._slope_hi, v)
 
     def inverse(self, w):
         """Evaluate ``g^-1(w)`` (vectorised, any shape)."""
+        w = np.asarray(w, dtype=float)
+        if w.size and self._ye[0] < w.min() and w.max() < self._ye[-1]:
+            return np.interp(w, self._ye, self._xe)
         return self._eval(self.y, self.x, 1.0 / self._slope_lo, 1.0 / self._slope_hi, w)
 
     def slope_at(self, v: float) -> float:

@@ -75,7 +75,7 @@ def rhs_cost_us(n=200000):
     return best / n * 1e6
 
 
-def run_benchmarks(seconds=0.2, repeats=3, rates=(48000.0, 1.0e6)):
+def bench_simulator(seconds=0.2, repeats=3, rates=(48000.0, 1.0e6)):
     """All rows as a list of (figure, value, unit)."""
     rows = [("first-call (compile or cache load) time", first_call_time(), "s")]
     rows.append(("rhs evaluation cost (best of 3)", rhs_cost_us(), "us"))
@@ -109,9 +109,9 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="0.1 s runs, 1 repeat, 48 kHz only")
     args = ap.parse_args(argv)
     if args.quick:
-        rows = run_benchmarks(0.1, 1, (48000.0,))
+        rows = bench_simulator(0.1, 1, (48000.0,))
     else:
-        rows = run_benchmarks()
+        rows = bench_simulator()
     width = max(len(r[0]) for r in rows)
     for fig, val, unit in rows:
         print(f"{fig:<{width}}  {val:12.4g} {unit}")
