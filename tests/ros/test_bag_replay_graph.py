@@ -62,8 +62,8 @@ def graph_nodes():
 
 
 def params_file():
-    from bearing_bringup.graph import source_config_path
-    return source_config_path()
+    from bearing_bringup.graph import config_path
+    return config_path()
 
 
 def transitions(states) -> list:
@@ -114,7 +114,7 @@ def test_live_run_replay_and_offline_agree(ros_graph, tmp_path, graph_nodes):
     start_pipeline(ros_graph)
     live = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
     sim = ros_graph.start("bearing_sim", "simulator", name="simulator", params_file=params_file(),
-                          params={"scenario": "or-ir", "segment_duration": SEGMENT, "wait_for_subscribers": 3,
+                          params={"scenario": "or-ir", "segment_duration": SEGMENT, "wait_for_subscribers": "vibration/drive_end:3,residual/outer_race:2,residual/inner_race:2",
                                   "linger": 2.0})
     ros_graph.wait_until(lambda: sim.returncode is not None, 120.0, "the simulator to finish the scenario")
     assert sim.returncode == 0, ros_graph.output()
@@ -135,6 +135,9 @@ def test_live_run_replay_and_offline_agree(ros_graph, tmp_path, graph_nodes):
     # 2. replay into fresh observers + diagnoser
     replayed = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
     start_pipeline(ros_graph)
+    ros_graph.wait_until(lambda: all(ros_graph.node.count_subscribers(t) >= 1
+                                     for t in ("residual/outer_race", "residual/inner_race")),
+                         60.0, "the fresh diagnoser to be ready")
     player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
         "play", str(bag), "--topics", "vibration/drive_end", "shaft_speed",
         "--wait-for-subscribers", "2", "--rate", "1"])  # 2: both observers matched before the first chunk

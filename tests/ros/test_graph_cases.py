@@ -2,7 +2,7 @@
 
 import pytest
 
-from bearing_bringup.graph import GRAPH, source_config_path
+from bearing_bringup.graph import GRAPH, config_path
 from bearing_bringup.state_report import StateChange, evaluate, format_table
 from bearing_msgs.msg import FaultState, VibrationChunk
 from graph_qos import LATCHED
@@ -26,7 +26,7 @@ def run_graph(ros_graph, scenario, **sim_params):
     for spec in GRAPH:
         params = {"scenario": scenario, **sim_params} if spec.executable == "simulator" else None
         members[spec.name] = ros_graph.start(spec.package, spec.executable, name=spec.name,
-                                             params_file=source_config_path(), params=params)
+                                             params_file=config_path(), params=params)
     sim = members["simulator"]
     ros_graph.wait_until(lambda: sim.returncode is not None, timeout=180.0, what="the scenario to end")
     assert sim.returncode == 0, ros_graph.output()

@@ -23,7 +23,7 @@ def test_publishes_gap_free_stamped_chunks_and_exits_at_the_end(ros_graph):
     speed = ros_graph.subscribe("shaft_speed", ShaftSpeed)
     truth = ros_graph.subscribe("sim/truth", FaultState, LATCHED)
     sim = ros_graph.start("bearing_sim", "simulator", params={
-        "schedule": "outer_race:0.05,normal:0.05", "realtime": False, "wait_for_subscribers": 1})
+        "schedule": "outer_race:0.05,normal:0.05", "realtime": False, "wait_for_subscribers": "vibration/drive_end:1"})
     ros_graph.wait_until(lambda: sim.returncode is not None, timeout=120.0, what="the simulator to exit")
     assert sim.returncode == 0, ros_graph.output()
     assert len(vib) == 10 and len(unb) == 10, f"{len(vib)} chunks\n{ros_graph.output()}"
@@ -43,7 +43,7 @@ def test_realtime_pacing_keeps_wall_clock(ros_graph):
     import time
     start = time.monotonic()
     sim = ros_graph.start("bearing_sim", "simulator", params={"scenario": "normal", "segment_duration": 0.5,
-                                                              "wait_for_subscribers": 1})
+                                                              "wait_for_subscribers": "vibration/drive_end:1"})
     ros_graph.wait_until(lambda: sim.returncode is not None, timeout=120.0, what="the simulator to exit")
     assert sim.returncode == 0, ros_graph.output()
     assert len(vib) == 50

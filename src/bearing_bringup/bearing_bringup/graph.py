@@ -32,6 +32,14 @@ GRAPH = (
 CONFIG_NAME = "monitor.yaml"
 
 
-def source_config_path() -> pathlib.Path:
-    """The parameters YAML in the source tree (``src/bearing_bringup/config``)."""
+def config_path() -> pathlib.Path:
+    """The parameters YAML: the installed ``share/bearing_bringup/config`` copy, else the source tree's."""
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        path = pathlib.Path(get_package_share_directory("bearing_bringup")) / "config" / CONFIG_NAME
+        if path.is_file():
+            return path
+    except (ImportError, KeyError):  # PackageNotFoundError is a KeyError
+        pass
     return pathlib.Path(__file__).resolve().parent.parent / "config" / CONFIG_NAME

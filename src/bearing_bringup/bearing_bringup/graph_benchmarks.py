@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from .graph import GRAPH, source_config_path
+from .graph import GRAPH, config_path
 from .graph_cli import installed_executable
 from .process_group import ProcessGroup
 
@@ -61,7 +61,7 @@ def bench_end_to_end_latency():
     try:
         for spec in GRAPH:
             argv = [str(installed_executable(spec.package, spec.executable)), "--ros-args",
-                    "-r", f"__node:={spec.name}", "--params-file", str(source_config_path())]
+                    "-r", f"__node:={spec.name}", "--params-file", str(config_path())]
             if spec.executable == "simulator":
                 argv += ["-p", f"scenario:={SCENARIO}", "-p", f"segment_duration:={SEGMENT_S}"]
             group.start(spec.name, argv)

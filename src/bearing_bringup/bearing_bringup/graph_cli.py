@@ -22,7 +22,7 @@ import sys
 import threading
 import time
 
-from .graph import CONFIG_NAME, GRAPH
+from .graph import CONFIG_NAME, GRAPH, config_path
 from .process_group import ProcessGroup
 from .state_report import StateChange, evaluate, format_table
 
@@ -51,12 +51,6 @@ def missing_parts() -> list:
     return missing
 
 
-def default_params_file() -> pathlib.Path:
-    from ament_index_python.packages import get_package_share_directory
-
-    return pathlib.Path(get_package_share_directory("bearing_bringup")) / "config" / CONFIG_NAME
-
-
 def node_argv(spec, params_file: pathlib.Path, namespace: str) -> list:
     argv = [str(installed_executable(spec.package, spec.executable)), "--ros-args",
             "-r", f"__node:={spec.name}", "--params-file", str(params_file)]
@@ -76,7 +70,7 @@ def main(argv=None) -> int:
                              "after the simulator ends")
     args = parser.parse_args(argv)
 
-    params_file = args.params or default_params_file()
+    params_file = args.params or config_path()
     if not params_file.is_file():
         print(f"bearing-graph: parameters file {params_file} not found", file=sys.stderr)
         return EXIT_FAILED

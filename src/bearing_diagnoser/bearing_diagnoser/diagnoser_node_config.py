@@ -10,8 +10,8 @@ PARAMETERS = (
                   lambda v: None if v >= 0 else "must be >= 0"),
     ParameterSpec("hop", 0.0, "window hop (s); 0 = the model set's default",
                   lambda v: None if v >= 0 else "must be >= 0"),
-    ParameterSpec("false_alarm_probability", 1e-3, "per-window false-alarm probability on noise that "
-                  "sets the detection thresholds", lambda v: None if 0 < v < 0.5 else "must be in (0, 0.5)"),
+    ParameterSpec("false_alarm_probability", 0.0, "per-window false-alarm probability on noise that sets the "
+                  "detection thresholds; 0 = the model set's default", lambda v: None if 0 <= v < 0.5 else "must be in [0, 0.5)"),
     ParameterSpec("stale_timeout", 1.0, "seconds without residuals before /diagnostics reports STALE", positive),
     ParameterSpec("diagnostics_period", 1.0, "seconds between /diagnostics messages", positive),
 )

@@ -22,6 +22,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from bearing_msgs.msg import FaultState as FaultStateMsg, Residual, ShaftSpeed
 from bearing_observer.chunk_stream import ChunkStream
+from bearing_observer.hw_model import DEFAULT_SETS
 from bearing_sim.fault_states import FaultState
 from bearing_sim.ros_parameters import declare
 
@@ -55,6 +56,7 @@ class DiagnoserNode(Node):
         self.last_heard = {h: None for h in TOPICS_RESIDUAL}
         self.last_decision = None
         self.shaft_speed = None
+        self.warm_thresholds()  # before subscribing: being subscribed means being ready
         self.pub_state = self.create_publisher(FaultStateMsg, TOPIC_STATE, STATE_QOS)
         self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         for h, topic in TOPICS_RESIDUAL.items():
@@ -62,18 +64,31 @@ class DiagnoserNode(Node):
         self.create_subscription(ShaftSpeed, TOPIC_SPEED, self.on_speed, QoSProfile(depth=10))
         self.create_timer(float(self.values["diagnostics_period"]), self.publish_diagnostics)
 
-    def _make_core(self, model_set: str) -> Diagnoser:
-        overrides = {"pfa": float(self.values["false_alarm_probability"])}
+    def warm_thresholds(self) -> None:
+        """Derive the thresholds of every model set this node may meet (about 1 s each)."""
+        for (_, rate), name in DEFAULT_SETS.items():
+            if self.values["model_set"] in ("", name):
+                Diagnoser(self._config(name), model_set=name, sample_rate=rate).thresholds()
+
+    def _config(self, name: str):
+        overrides = {}
+        if self.values["false_alarm_probability"] > 0:
+            overrides["pfa"] = float(self.values["false_alarm_probability"])
         if self.values["window"] > 0:
             overrides["window_s"] = float(self.values["window"])
         if self.values["hop"] > 0:
             overrides["hop_s"] = float(self.values["hop"])
+        return config_for(name, **overrides)
+
+    def _make_core(self, model_set: str, sample_rate: float) -> Diagnoser:
         name = self.values["model_set"] or model_set
-        core = Diagnoser(config_for(name, **overrides), model_set=name)
+        core = Diagnoser(self._config(name), model_set=name, sample_rate=sample_rate)
         core.keep_history = False
         cfg = core.config
+        threshold, kurtosis_threshold = core.thresholds()  # cached by warm_thresholds for the default sets
         self.get_logger().info(f"deciding with {name} defaults: window {cfg.window_s:g} s, hop {cfg.hop_s:g} s, "
-                               f"false-alarm probability {cfg.pfa:g} per window")
+                               f"false-alarm probability {cfg.pfa:g} per window -> periodicity threshold "
+                               f"{threshold:.3g}, kurtosis threshold {kurtosis_threshold:.3g}")
         return core
 
     def on_speed(self, msg: ShaftSpeed) -> None:
@@ -93,7 +108,7 @@ class DiagnoserNode(Node):
         if self.core is None or (verdict.restart and hypothesis in self.core_streams):
             if self.core is not None:
                 self.get_logger().info(f"{verdict.reason}; restarting the decision")
-            self.core = self._make_core(msg.model_set)
+            self.core = self._make_core(msg.model_set, msg.sample_rate)
             self.core_streams = set()
             self.time_offset = stamp - msg.first_sample_index / msg.sample_rate
         self.core_streams.add(hypothesis)

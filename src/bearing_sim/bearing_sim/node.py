@@ -23,7 +23,7 @@ from bearing_msgs.msg import FaultState as FaultStateMsg, ShaftSpeed, VibrationC
 from .fault_states import FaultState
 from .ros_parameters import declare
 from .sim_node_config import (PARAMETERS, SOURCE, TOPIC_SHAFT_SPEED, TOPIC_TRUTH, TOPIC_UNBALANCE,
-                              TOPIC_VIBRATION, build_run)
+                              TOPIC_VIBRATION, build_run, parse_wait_spec)
 from .simulator import Simulator
 
 ENDLESS_SEGMENT_S = 3600.0  # normal operation without a schedule: hour-long segments, repeated
@@ -125,14 +125,17 @@ def warm_up(node: SimulatorNode) -> None:
 
 
 def wait_for_subscribers(node: SimulatorNode) -> None:
-    """Hold the start until the expected consumers are matched (published chunks are not latched)."""
-    wanted = int(node.values["wait_for_subscribers"])
+    """Hold the start until the graph's consumers are matched (published chunks are not latched)."""
+    wanted = parse_wait_spec(node.values["wait_for_subscribers"])
     deadline = time.monotonic() + float(node.values["subscriber_timeout"])
-    while rclpy.ok() and node.pub_vib.get_subscription_count() < wanted and time.monotonic() < deadline:
+
+    def missing():
+        return [(t, n, node.count_subscribers(t)) for t, n in wanted if node.count_subscribers(t) < n]
+
+    while rclpy.ok() and missing() and time.monotonic() < deadline:
         rclpy.spin_once(node, timeout_sec=0.05)
-    count = node.pub_vib.get_subscription_count()
-    if count < wanted:
-        node.get_logger().warn(f"starting with {count} of {wanted} subscribers to {node.pub_vib.topic_name}")
+    for topic, n, have in missing():
+        node.get_logger().warn(f"starting with {have} of {n} subscribers to {topic}")
 
 
 def run_node(node: SimulatorNode) -> None:

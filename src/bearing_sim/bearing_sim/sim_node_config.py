@@ -27,11 +27,32 @@ PARAMETERS = (
     ParameterSpec("variant", "default", "model variant (see bearing_sim.model_parameters)"),
     ParameterSpec("publish_clock", False, "publish /clock with the simulation time (for use_sim_time consumers)"),
     ParameterSpec("frame_id", "drive_end", "frame_id of vibration/drive_end (sensor location)"),
-    ParameterSpec("wait_for_subscribers", 0, "before publishing, wait until vibration/drive_end has this many "
-                  "subscribers (the graph's observers), at most subscriber_timeout s", lambda v: None if v >= 0 else "must be >= 0"),
-    ParameterSpec("subscriber_timeout", 10.0, "seconds to wait for subscribers before starting anyway", positive),
+    ParameterSpec("wait_for_subscribers", "", "before publishing, wait until these topics have these many "
+                  "subscribers, 'topic:count,...' e.g. 'vibration/drive_end:2,residual/outer_race:1' (the graph's "
+                  "consumers are ready), at most subscriber_timeout s; empty = start at once",
+                  lambda v: _check_wait_spec(v)),
+    ParameterSpec("subscriber_timeout", 30.0, "seconds to wait for subscribers before starting anyway", positive),
     ParameterSpec("linger", 1.0, "seconds to keep serving after the last chunk so subscribers receive it", lambda v: None if v >= 0 else "must be >= 0"),
 )
+
+def parse_wait_spec(spec: str) -> list:
+    """``'topic:count,...'`` -> [(topic, count)]; ValueError on a malformed entry."""
+    pairs = []
+    for item in filter(None, (part.strip() for part in spec.split(","))):
+        topic, sep, count = item.rpartition(":")
+        if not sep or not topic or not count.isdigit():
+            raise ValueError(f"expected 'topic:count', got {item!r}")
+        pairs.append((topic, int(count)))
+    return pairs
+
+
+def _check_wait_spec(spec: str):
+    try:
+        parse_wait_spec(spec)
+    except ValueError as exc:
+        return str(exc)
+    return None
+
 
 TOPIC_VIBRATION = "vibration/drive_end"
 TOPIC_UNBALANCE = "unbalance"
