@@ -33,6 +33,7 @@ TOOLS = [
     ("bearing_sim", "bearing-sim"),
     ("bearing_observer", "bearing-identify"),
     ("bearing_diagnoser", "bearing-diagnose"),
+    ("bearing_diagnoser", "bearing-cwru-report"),
     ("bearing_bringup", "bearing-bag"),
     ("bearing_bringup", "bearing-graph"),
 ]

@@ -20,6 +20,7 @@ setup(
         "console_scripts": [
             'diagnoser = bearing_diagnoser.node:main',
             'bearing-diagnose = bearing_diagnoser.diagnose_cli:main',
+            'bearing-cwru-report = bearing_diagnoser.cwru_report:main',
         ],
     },
 )

@@ -12,7 +12,6 @@ reproduce the live decisions exactly (up to a chunk); the offline run uses the s
 
 from __future__ import annotations
 
-import importlib
 import json
 import os
 import signal
@@ -24,7 +23,7 @@ import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from bearing_msgs.msg import FaultState
-from ros_harness import INSTALL
+from ros_harness import executable
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -32,33 +31,10 @@ BAG_CLI = [sys.executable, "-m", "bearing_bringup.bag_cli"]
 LATCHED_ALL = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
 QUIET_S = 2.0  # s without a new fault_state: the diagnoser has caught up
-NODES = (("bearing_sim", "simulator", "bearing_sim.node"),
-         ("bearing_observer", "observer", "bearing_observer.node"),
-         ("bearing_diagnoser", "diagnoser", "bearing_diagnoser.node"))
 STATE_CODES = {"normal": 0, "outer_race": 1, "inner_race": 2, "ball": 3, "unknown": 4}
 SEGMENT = 0.5  # s per scenario segment: long enough for the decision windows
 ONSET_TOL_REPLAY = 0.011  # s: one 10 ms chunk
 ONSET_TOL_OFFLINE = 0.05  # s
-
-
-def _missing_nodes() -> list:
-    missing = []
-    for package, exe, module in NODES:
-        if not (INSTALL / package / "lib" / package / exe).exists():
-            missing.append(f"{package}/{exe} (not built)")
-            continue
-        try:
-            importlib.import_module(module)
-        except Exception as exc:  # being written: ImportError, NotImplementedError, ...
-            missing.append(f"{module} ({exc.__class__.__name__}: {exc})")
-    return missing
-
-
-@pytest.fixture
-def graph_nodes():
-    missing = _missing_nodes()
-    if missing:
-        pytest.skip("graph nodes not available yet: " + "; ".join(missing))
 
 
 def params_file():
@@ -106,7 +82,7 @@ def stop(member, timeout=15.0):
     return member.process.wait(timeout=timeout)
 
 
-def test_live_run_replay_and_offline_agree(ros_graph, tmp_path, graph_nodes):
+def test_live_run_replay_and_offline_agree(ros_graph, tmp_path):
     bag = tmp_path / "or_ir"
     # 1. live run, recorded
     recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + ["record", "--out", str(bag)])
@@ -150,13 +126,8 @@ def test_live_run_replay_and_offline_agree(ros_graph, tmp_path, graph_nodes):
         assert abs(t_live - t_replay) <= ONSET_TOL_REPLAY, (recorded, again)
 
     # 3. offline: bearing-diagnose BAG_DIR
-    exe = INSTALL / "bearing_diagnoser" / "lib" / "bearing_diagnoser" / "bearing-diagnose"
-    inline = "import sys; from bearing_diagnoser.diagnose_cli import main; sys.exit(main())"
-    argv = [str(exe)] if exe.exists() else [sys.executable, "-c", inline]
-    run = subprocess.run(argv + [str(bag)], capture_output=True, text=True, timeout=300, env=ros_graph.env)
-    if run.returncode != 0 and ("not supported yet" in run.stderr or "not available" in run.stderr):
-        pytest.skip("bearing-diagnose does not read bags yet (signal_files.load_bag → bag_files.load_bag): "
-                    + run.stderr.strip())
+    exe = executable("bearing_diagnoser", "bearing-diagnose")  # FileNotFoundError when not built
+    run = subprocess.run([str(exe), str(bag)], capture_output=True, text=True, timeout=300, env=ros_graph.env)
     assert run.returncode == 0, run.stderr
     segments = [json.loads(line) for line in run.stdout.splitlines() if line.strip()]
     t0 = contents.chunks[0].stamp  # segment times are relative to the first sample

@@ -6,7 +6,6 @@ import pytest
 
 from bearing_msgs.msg import FaultState, ShaftSpeed, VibrationChunk
 from graph_qos import LATCHED
-from ros_harness import executable
 
 pytestmark = pytest.mark.ros
 

@@ -28,14 +28,6 @@ def run(argv, capsys):
     return code, [json.loads(x) for x in out.splitlines() if x.strip()], err
 
 
-def _need_observers():
-    try:
-        from bearing_observer.observer import FaultObserver
-        FaultObserver.from_model_set("sim_48k", "outer_race", 1800.0, 48000.0)
-    except (ImportError, ValueError, OSError) as exc:
-        pytest.skip(f"observer / sim_48k models not available: {exc}")
-
-
 @pytest.fixture
 def or_npz(tmp_path):
     y = burst_train(0.4, FS, BPFO, amplitude=10.0) + white_noise(0.4, FS, 4.5e-3)
@@ -43,7 +35,6 @@ def or_npz(tmp_path):
 
 
 def test_model_method_prints_one_json_object_per_segment(or_npz, capsys):
-    _need_observers()
     code, lines, err = run([or_npz], capsys)
     assert code == 0, err
     assert [x["state"] for x in lines] == ["outer_race"]
@@ -136,8 +127,6 @@ def test_unknown_channel_in_npz(or_npz, capsys):
 
 
 def test_plot_writes_figures(tmp_path, capsys):
-    pytest.importorskip("matplotlib")
-    _need_observers()
     y = burst_train(0.3, FS, BPFO, amplitude=10.0) + white_noise(0.3, FS, 4.5e-3)
     path = write_npz(tmp_path / "or.npz", y)
     code, lines, err = run([path, "--plot", tmp_path / "fig"], capsys)

@@ -4,8 +4,7 @@ Simulator (bearing_sim.simulator) -> OR and IR observers chunk by chunk
 (bearing_observer.observer, model set sim_48k) -> incremental decision.  Every true
 segment must be diagnosed, each detection within 0.05 s of the true change; with sensor
 noise (4.5e-3 (m/s²)/√Hz, the CWRU normal level) too; at another shaft speed; and a long
-noisy NORMAL stream must raise no alarm.  Skips with the reason while the simulator, the
-observer or the sim_48k model set are missing.
+noisy NORMAL stream must raise no alarm.
 """
 
 from __future__ import annotations
@@ -15,30 +14,18 @@ import functools
 import numpy as np
 import pytest
 
+from bearing_diagnoser.diag_benchmarks import score_case, simulate_case
+from bearing_diagnoser.offline import diagnose_recording
+from bearing_diagnoser.signal_files import Recording
 from bearing_sim.fault_states import FaultState
+from bearing_sim.simulator import SimulationConfig, simulate
 
 DELAY_MAX = 0.05  # s, after the true change
 NOISE = 4.5e-3  # (m/s²)/√Hz
 
 
-def _needs_pipeline():
-    try:
-        from bearing_sim.simulator import SimulationConfig, simulate  # noqa: F401
-    except ImportError as exc:
-        pytest.skip(f"simulator not available yet: {exc}")
-    try:
-        from bearing_observer.observer import FaultObserver
-        FaultObserver.from_model_set("sim_48k", "outer_race", 1800.0, 48000.0)
-    except ImportError as exc:
-        pytest.skip(f"observer not available yet: {exc}")
-    except (ValueError, OSError) as exc:  # ModelFileError is a ValueError
-        pytest.skip(f"model set sim_48k not available yet: {exc}")
-
-
 @functools.lru_cache(maxsize=None)
 def _run(case: str, rpm: float, noise: float, method: str = "model"):
-    from bearing_diagnoser.diag_benchmarks import score_case, simulate_case
-    from bearing_diagnoser.offline import diagnose_recording
     rec = simulate_case(case, rpm, noise)
     res = diagnose_recording(rec, method=method, quiet=True)
     return res, score_case(res.segments, rec.truth, rec.sample_rate)
@@ -60,7 +47,6 @@ def _check(case, rows, res):
 
 @pytest.mark.parametrize("case", CASES)
 def test_thesis_case_noise_free(case):
-    _needs_pipeline()
     res, rows = _run(case, 1800.0, 0.0)
     _check(case, rows, res)
     assert res.model_set == "sim_48k"
@@ -68,7 +54,6 @@ def test_thesis_case_noise_free(case):
 
 @pytest.mark.parametrize("case", CASES)
 def test_thesis_case_with_sensor_noise(case):
-    _needs_pipeline()
     res, rows = _run(case, 1800.0, NOISE)
     _check(case, rows, res)
 
@@ -76,7 +61,6 @@ def test_thesis_case_with_sensor_noise(case):
 @pytest.mark.parametrize("case", ["or-ir", "ir-or", "normal-or", "ir-normal"])
 def test_thesis_case_at_another_speed(case):
     """1500 rpm with noise: fewer impacts per 0.05 s window; the states must still be right."""
-    _needs_pipeline()
     res, rows = _run(case, 1500.0, NOISE)
     for r in rows:
         assert r["detected"], f"{case} @1500 rpm: {r['state']} at {r['start']} s missed"
@@ -87,7 +71,6 @@ def test_model_explains_the_matching_fault_only():
     """Once the observers have locked on (0.1 s into a segment), the matching observer
     removes most of the measurement energy; the other one explains nothing or injects
     its own impulses (E ≤ 0: the thesis 3.2.3 situation)."""
-    _needs_pipeline()
     res, _ = _run("or-ir", 1800.0, NOISE)
 
     def median_e(h, a, b):
@@ -99,10 +82,6 @@ def test_model_explains_the_matching_fault_only():
 
 
 def test_long_noisy_normal_stream_raises_no_alarm():
-    _needs_pipeline()
-    from bearing_sim.simulator import SimulationConfig, simulate
-    from bearing_diagnoser.offline import diagnose_recording
-    from bearing_diagnoser.signal_files import Recording
     d = simulate(SimulationConfig(rpm=1800, sample_rate=48000, noise_density=NOISE, seed=5),
                  [(FaultState.NORMAL, 3.0)])
     rec = Recording(np.asarray(d["accel"]), 48000.0, 1800.0, "simulator", np.asarray(d["truth"]))
@@ -113,7 +92,6 @@ def test_long_noisy_normal_stream_raises_no_alarm():
 
 @pytest.mark.parametrize("case", ["or-ir", "normal-ir"])
 def test_envelope_method_on_the_simulator(case):
-    _needs_pipeline()
     res, rows = _run(case, 1800.0, NOISE, "envelope")
     for r in rows:
         assert r["detected"], f"envelope {case}: {r['state']} missed"

@@ -1,8 +1,5 @@
 """HW identification: known systems, the simulator's models, CWRU records."""
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -11,16 +8,13 @@ from scipy import signal
 from bearing_observer.identification import (
     estimate_fault_phase, fit_percent, hw_fit, identify_fault_model, oe_fit,
     poly_to_reflection, reflection_to_poly)
+from bearing_observer.identify_cli import load_mat_record
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
 from bearing_observer.piecewise_linear import MonotonePiecewiseLinear
+from bearing_sim.fault_states import FaultState
+from bearing_sim.simulator import SimulationConfig, simulate
 
-REPO = Path(__file__).resolve().parents[2]
 FS = 48000.0
-
-
-def cwru_dir():
-    d = Path(os.environ.get("BEARING_CWRU_DIR", REPO.parent / "shared" / "data" / "cwru"))
-    return d if (d / "130_OR007at6_0hp_DE12k.mat").is_file() else None
 
 
 def _true_system():
@@ -92,11 +86,6 @@ def test_phase_estimate_on_synthetic_train():
 
 @pytest.fixture(scope="module")
 def sim_data():
-    try:
-        from bearing_sim.fault_states import FaultState
-        from bearing_sim.simulator import SimulationConfig, simulate
-    except ImportError as exc:  # pragma: no cover - until the simulator exists
-        pytest.skip(f"bearing_sim.simulator not available yet: {exc}")
     cfg = SimulationConfig(rpm=1800, sample_rate=FS, noise_density=0.0)
     return {fault.label: np.asarray(simulate(cfg, [(fault, 0.4)])["accel"])
             for fault in (FaultState.OUTER_RACE, FaultState.INNER_RACE)}
@@ -118,12 +107,8 @@ def test_simulator_models_fit_at_least_70_percent(sim_data, fault):
 
 
 # --- CWRU ---------------------------------------------------------------------------------
-@pytest.mark.skipif(cwru_dir() is None, reason="CWRU records not found in ../shared/data/cwru "
-                    "beside the repository (or $BEARING_CWRU_DIR)")
-def test_cwru_outer_race_identification():
-    from bearing_observer.identify_cli import load_mat_record
-
-    y, rpm, ch = load_mat_record(cwru_dir() / "130_OR007at6_0hp_DE12k.mat")
+def test_cwru_outer_race_identification(cwru_record):
+    y, rpm, ch = load_mat_record(cwru_record("130_OR007at6_0hp_DE12k.mat"))
     assert ch == "X130_DE_time" and rpm == 1796.0
     r = identify_fault_model(y[:12000], 12000.0, rpm, "outer_race")
     # slip: measured BPFO within 1 % above/below the kinematic value, and not equal to it

@@ -1,20 +1,11 @@
 """The bearing-identify command line (identify_cli.main)."""
 
 import json
-import os
-from pathlib import Path
 
 import pytest
 
 from bearing_observer.hw_model import load_model_set
 from bearing_observer.identify_cli import main
-
-REPO = Path(__file__).resolve().parents[2]
-
-
-def cwru_dir():
-    d = Path(os.environ.get("BEARING_CWRU_DIR", REPO.parent / "shared" / "data" / "cwru"))
-    return d if (d / "130_OR007at6_0hp_DE12k.mat").is_file() else None
 
 
 def test_bad_arguments(tmp_path, capsys):
@@ -28,12 +19,10 @@ def test_bad_arguments(tmp_path, capsys):
         main(["--source", "sim", "--model-set", "t"])  # --sample-rate missing
 
 
-@pytest.mark.skipif(cwru_dir() is None, reason="CWRU records not found in ../shared/data/cwru "
-                    "beside the repository (or $BEARING_CWRU_DIR)")
-def test_identifies_cwru_set_with_provenance(tmp_path, capsys):
-    d = cwru_dir()
-    rc = main(["--source", f"outer_race={d / '130_OR007at6_0hp_DE12k.mat'}",
-               "--source", f"inner_race={d / '105_IR007_0hp_DE12k.mat'}",
+def test_identifies_cwru_set_with_provenance(tmp_path, capsys, cwru_record):
+    outer, inner = cwru_record("130_OR007at6_0hp_DE12k.mat"), cwru_record("105_IR007_0hp_DE12k.mat")
+    rc = main(["--source", f"outer_race={outer}",
+               "--source", f"inner_race={inner}",
                "--sample-rate", "12000", "--orders", "6", "6", "0", "--max-seconds", "1.0",
                "--model-set", "tiny", "--out", str(tmp_path)])
     assert rc == 0

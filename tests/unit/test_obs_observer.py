@@ -1,18 +1,17 @@
 """The HW fault observer (Fig. 3.1, eqs. 3.1-3.4): streaming, stability, noise, phase."""
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
 from bearing_observer.hw_model import load_model_set
 from bearing_observer.identification import identify_fault_model
+from bearing_observer.identify_cli import load_mat_record
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
 from bearing_observer.observer import FaultObserver, ModalFilter, balanced_realization
+from bearing_sim.fault_states import FaultState
+from bearing_sim.simulator import SimulationConfig, simulate
 
-REPO = Path(__file__).resolve().parents[2]
 FS = 48000.0
 
 
@@ -23,19 +22,9 @@ def sim48():
 
 @pytest.fixture(scope="module")
 def sim_data():
-    try:
-        from bearing_sim.fault_states import FaultState
-        from bearing_sim.simulator import SimulationConfig, simulate
-    except ImportError as exc:  # pragma: no cover
-        pytest.skip(f"bearing_sim.simulator not available yet: {exc}")
     cfg = SimulationConfig(rpm=1800, sample_rate=FS, noise_density=0.0)
     return {f.label: np.asarray(simulate(cfg, [(f, 0.4)])["accel"])
             for f in (FaultState.OUTER_RACE, FaultState.INNER_RACE)}
-
-
-def cwru_dir():
-    d = Path(os.environ.get("BEARING_CWRU_DIR", REPO.parent / "shared" / "data" / "cwru"))
-    return d if (d / "130_OR007at6_0hp_DE12k.mat").is_file() else None
 
 
 # --- structure ---------------------------------------------------------------------------
@@ -207,17 +196,15 @@ def test_phase_recovered_on_simulator(sim48, sim_data, fault):
 
 
 # --- CWRU ----------------------------------------------------------------------------------
-@pytest.mark.skipif(cwru_dir() is None, reason="CWRU records not found in ../shared/data/cwru "
-                    "beside the repository (or $BEARING_CWRU_DIR)")
-def test_cwru_phase_locks_only_on_matching_fault():
+def test_cwru_phase_locks_only_on_matching_fault(cwru_record):
     """Resultant length of the phase estimates over 0.05 s updates (1 = locked): the OR
     observer locks on record 130 (OR) and not on 105 (IR), and vice versa."""
-    from bearing_observer.identify_cli import load_mat_record
-
     models = load_model_set("cwru_de_6205", sample_rate=12000.0)
     lock = {}
-    for rec, name in (("130", "130_OR007at6_0hp_DE12k.mat"), ("105", "105_IR007_0hp_DE12k.mat")):
-        y, rpm, _ = load_mat_record(cwru_dir() / name)
+    paths = {rec: cwru_record(name)  # skips with the reason when a record is absent
+             for rec, name in (("130", "130_OR007at6_0hp_DE12k.mat"), ("105", "105_IR007_0hp_DE12k.mat"))}
+    for rec, path in paths.items():
+        y, rpm, _ = load_mat_record(path)
         y = y[:60000]
         for ft, m in models.items():
             obs = FaultObserver(m, rpm=rpm)

@@ -4,7 +4,6 @@ import os
 import sys
 import time
 
-import pytest
 
 from bearing_bringup.process_group import ProcessGroup
 

@@ -24,7 +24,7 @@ import time
 
 from .graph import CONFIG_NAME, GRAPH, config_path
 from .process_group import ProcessGroup
-from .state_report import StateChange, evaluate, format_table
+from .state_report import evaluate, format_table
 
 EXIT_MISSING = 3
 EXIT_FAILED = 1

@@ -13,10 +13,8 @@ import math
 import sys
 
 import numpy as np
-import rclpy
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -24,6 +22,7 @@ from bearing_msgs.msg import FaultState as FaultStateMsg, Residual, ShaftSpeed
 from bearing_observer.chunk_stream import ChunkStream
 from bearing_observer.hw_model import DEFAULT_SETS
 from bearing_sim.fault_states import FaultState
+from bearing_sim.node_main import run_node_main
 from bearing_sim.ros_parameters import declare
 
 from .decision import Diagnoser, config_for
@@ -161,23 +160,7 @@ class DiagnoserNode(Node):
 
 
 def main(args=None) -> int:
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = DiagnoserNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ValueError as exc:
-        print(f"diagnoser: {exc}", file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
-    return 0
-
+    return run_node_main("diagnoser", DiagnoserNode, None, args)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -210,16 +210,28 @@ def train_correlation(abs_residual_blocks: np.ndarray, train_blocks: np.ndarray,
     """
     a = np.asarray(abs_residual_blocks, float)
     u = np.asarray(train_blocks, float)
-    best = 0.0
-    for k in range(0, int(max(0, max_lag)) + 1):
-        x, z = a[k:], u[:u.size - k]
-        if x.size < 3:
-            break
-        sx, sz = x.std(), z.std()
-        if sx > 0 and sz > 0:
-            c = float(np.mean((x - x.mean()) * (z - z.mean())) / (sx * sz))
-            best = c if k == 0 or c > best else best
-    return best
+    n = min(a.size, u.size)
+    a, u = a[:n], u[:n]
+    lags = np.arange(0, min(int(max(0, max_lag)), n - 3) + 1)
+    if lags.size == 0:
+        return 0.0
+    m = n - lags  # overlap length per lag: x = a[k:], z = u[:n-k]
+    ca = np.concatenate([[0.0], np.cumsum(a)])
+    ca2 = np.concatenate([[0.0], np.cumsum(a * a)])
+    cu = np.concatenate([[0.0], np.cumsum(u)])
+    cu2 = np.concatenate([[0.0], np.cumsum(u * u)])
+    mx = (ca[n] - ca[lags]) / m
+    mz = cu[n - lags] / m
+    vx = (ca2[n] - ca2[lags]) / m - mx * mx
+    vz = cu2[n - lags] / m - mz * mz
+    sxz = np.correlate(a, u, mode="full")[n - 1 + lags]
+    tiny = 1e-12 * max(float(np.max(a * a, initial=0.0)), float(np.max(u * u, initial=0.0)), 1e-300)
+    valid = (vx > tiny) & (vz > tiny)
+    if not valid.any():
+        return 0.0
+    c = (sxz[valid] / m[valid] - mx[valid] * mz[valid]) / np.sqrt(vx[valid] * vz[valid])
+    best = float(c.max())
+    return best if valid[0] else max(0.0, best)
 
 
 def squared_envelope_spectrum(env: np.ndarray, envelope_rate: float, pad: int = 8) -> tuple[np.ndarray, np.ndarray]:

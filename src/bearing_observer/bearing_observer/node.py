@@ -13,13 +13,12 @@ import math
 import sys
 
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from bearing_msgs.msg import Residual, ShaftSpeed, VibrationChunk
 from bearing_sim.fault_states import parse_fault
+from bearing_sim.node_main import run_node_main
 from bearing_sim.ros_parameters import declare
 
 from .chunk_stream import ChunkStream
@@ -113,23 +112,7 @@ class ObserverNode(Node):
 
 def main(args=None) -> int:
     argv = sys.argv if args is None else args
-    rclpy.init(args=argv)
-    node = None
-    try:
-        node = ObserverNode(default_node_name(argv))
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ValueError as exc:
-        print(f"observer: {exc}", file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
-    return 0
-
+    return run_node_main("observer", lambda: ObserverNode(default_node_name(argv)), None, argv)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -29,7 +29,7 @@ source file, and the right-hand side is compiled into this loop. After editing
 import numpy as np
 from numba import njit
 
-from .model_parameters import P_OMD, P_OMI, P_OMO, P_PHIMU
+from .model_parameters import P_OMD, P_OMI, P_OMO
 from .rotor_rhs import FASTMATH, rhs_trig, trig_at, NSTATE, NDOF, WORK_LEN
 
 # Dormand-Prince 5(4) tableau

@@ -13,7 +13,6 @@ import time
 
 import rclpy
 from builtin_interfaces.msg import Time
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -21,6 +20,7 @@ from rosgraph_msgs.msg import Clock
 from bearing_msgs.msg import FaultState as FaultStateMsg, ShaftSpeed, VibrationChunk
 
 from .fault_states import FaultState
+from .node_main import run_node_main
 from .ros_parameters import declare
 from .sim_node_config import (PARAMETERS, SOURCE, TOPIC_SHAFT_SPEED, TOPIC_TRUTH, TOPIC_UNBALANCE,
                               TOPIC_VIBRATION, build_run, parse_wait_spec)
@@ -174,23 +174,7 @@ def run_node(node: SimulatorNode) -> None:
 
 
 def main(args=None) -> int:
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = SimulatorNode()
-        run_node(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ValueError as exc:
-        print(f"simulator: {exc}", file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
-    return 0
-
+    return run_node_main("simulator", SimulatorNode, run_node, args)
 
 if __name__ == "__main__":
     sys.exit(main())

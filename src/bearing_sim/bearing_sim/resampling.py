@@ -11,7 +11,6 @@ fine-grid stream, so the result does not depend on how the stream is chunked.
 
 import math
 
-import numpy as np
 from numba import njit
 from scipy import signal
 
