@@ -60,6 +60,8 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--chunk-duration", type=float, default=0.01, metavar="S", help="seconds per chunk (default 0.01)")
     m.add_argument("--start-time", type=float, default=0.0, metavar="S", help="stamp of the first sample (default 0)")
     m.add_argument("--duration", type=float, metavar="S", help="convert only the first S seconds")
+    m.add_argument("--resample", type=float, metavar="HZ",
+                   help="resample (anti-aliased) to this rate first, e.g. 12000 for the CWRU model set")
     m.add_argument("--namespace", default="", help="namespace of the topics (default: root)")
     m.add_argument("--storage", choices=("mcap", "sqlite3"), default="mcap")
     m.add_argument("--out", "-o", required=True, metavar="BAG_DIR")
@@ -104,7 +106,8 @@ def main(argv=None) -> int:
             from .bag_write import mat_to_bag
             res = mat_to_bag(args.mat, args.out, args.sample_rate, channel=args.channel, rpm=args.rpm,
                              chunk_duration=args.chunk_duration, start_time=args.start_time,
-                             storage=args.storage, namespace=args.namespace, max_duration=args.duration)
+                             storage=args.storage, namespace=args.namespace, max_duration=args.duration,
+                             resample_to=args.resample)
             print(f"bearing-bag: wrote {res.chunks} chunks ({res.samples} samples, {res.duration:.3f} s at "
                   f"{res.sample_rate:g} Hz, {res.rpm:g} rpm from the {res.rpm_from}) to {res.path}",
                   file=sys.stderr)

@@ -133,7 +133,8 @@ class MatConversion:
 
 def mat_to_bag(mat_path, out, sample_rate: float, channel: Optional[str] = None, rpm: Optional[float] = None,
                chunk_duration: float = DEFAULT_CHUNK_DURATION, start_time: float = 0.0,
-               storage: str = "mcap", namespace: str = "", max_duration: Optional[float] = None) -> MatConversion:
+               storage: str = "mcap", namespace: str = "", max_duration: Optional[float] = None,
+               resample_to: Optional[float] = None) -> MatConversion:
     """Convert a CWRU-style recording into a bag as a sensor driver would have published it.
 
     ``vibration/drive_end``: VibrationChunk of ``chunk_duration`` s (the last one may be
@@ -141,6 +142,8 @@ def mat_to_bag(mat_path, out, sample_rate: float, channel: Optional[str] = None,
     stamp = ``start_time`` + first_sample_index / sample_rate.  ``shaft_speed``: one
     ShaftSpeed (rad/s) per chunk with the same stamp, from ``rpm`` or the file's
     ``X...RPM`` variable.  Log time = stamp.  ``max_duration`` (s) keeps only the start.
+    ``resample_to`` (Hz): anti-aliased resampling first (e.g. the 48 kHz normal record 97
+    to the 12 kHz rate of the CWRU model set), as a sensor driver configured for it would deliver.
     Loading (units, channel and rpm lookup) is ``bearing_diagnoser.signal_files.load_mat``.
     """
     from bearing_diagnoser.signal_files import load_mat
@@ -153,14 +156,19 @@ def mat_to_bag(mat_path, out, sample_rate: float, channel: Optional[str] = None,
         raise BagError(f"{mat_path}: no X...RPM variable for channel {rec.channel}; give --rpm")
     if not (np.isfinite(rec.rpm) and rec.rpm > 0):
         raise BagError(f"shaft speed must be positive, got {rec.rpm:g} rpm")
-    x = rec.accel
+    from bearing_diagnoser.offline import resample
+
+    x, fs = rec.accel, rec.sample_rate
+    if resample_to is not None:
+        if not (np.isfinite(resample_to) and resample_to > 0):
+            raise BagError(f"resample rate must be positive, got {resample_to:g} Hz")
+        x, fs = resample(x, fs, resample_to), float(resample_to)
     if max_duration is not None:
-        x = x[: max(1, int(round(max_duration * rec.sample_rate)))]
-    count = write_signal_bag(out, x, rec.sample_rate, rec.rpm, source="cwru",
+        x = x[: max(1, int(round(max_duration * fs)))]
+    count = write_signal_bag(out, x, fs, rec.rpm, source="cwru",
                              speed_source="cwru" if rpm is None else "command_line",
                              chunk_duration=chunk_duration, start_time=start_time, storage=storage,
                              namespace=namespace)
-    fs = rec.sample_rate
     return MatConversion(str(out), count, int(x.size), fs, float(rec.rpm),
                          "file" if rpm is None else "command line", x.size / fs)
 
