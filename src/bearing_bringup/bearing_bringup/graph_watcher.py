@@ -14,16 +14,13 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from bearing_msgs.msg import FaultState as FaultStateMsg, VibrationChunk
 from bearing_sim.fault_states import FaultState
+from bearing_sim.stamps import to_seconds
 
 from .state_report import StateChange
 
 LATCHED = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 STREAM = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 KEEP_SIGNAL_S = 60.0  # seconds of vibration kept for the plot
-
-
-def seconds(stamp) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
 
 
 class GraphWatcher:
@@ -55,7 +52,7 @@ class GraphWatcher:
             self.executor.spin_once(timeout_sec=0.05)
 
     def _on_state(self, msg):
-        change = StateChange(int(msg.state), seconds(msg.onset), seconds(msg.header.stamp), float(msg.confidence))
+        change = StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp), float(msg.confidence))
         with self._lock:
             previous = self._decisions[-1] if self._decisions else None
             self._decisions.append(change)
@@ -68,10 +65,10 @@ class GraphWatcher:
 
     def _on_truth(self, msg):
         with self._lock:
-            self._truth.append(StateChange(int(msg.state), seconds(msg.onset), seconds(msg.header.stamp)))
+            self._truth.append(StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp)))
 
     def _on_chunk(self, msg):
-        t0 = seconds(msg.header.stamp)
+        t0 = to_seconds(msg.header.stamp)
         samples = np.asarray(msg.samples)
         with self._lock:
             self._fs = msg.sample_rate

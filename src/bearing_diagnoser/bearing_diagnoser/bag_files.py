@@ -30,6 +30,8 @@ from typing import Iterator, NamedTuple, Optional
 
 import numpy as np
 
+from bearing_sim.stamps import to_seconds
+
 from .signal_files import InputError, Recording
 
 #: Interface package of the project; its .msg files give the definitions.
@@ -237,11 +239,6 @@ def find_topic(topics, relative: str, namespace: Optional[str] = None) -> Option
 # Decoded contents
 
 
-def stamp_seconds(stamp) -> float:
-    """builtin_interfaces/Time → float seconds."""
-    return float(stamp.sec) + float(stamp.nanosec) * 1e-9
-
-
 @dataclass
 class Chunk:
     """One ``VibrationChunk`` (stamp = time of its first sample, s)."""
@@ -302,8 +299,8 @@ class BagContents:
 
 def _state_sample(msg, log_time: float) -> StateSample:
     scores = {str(k): float(v) for k, v in zip(msg.hypotheses, np.asarray(msg.scores).tolist())}
-    return StateSample(stamp_seconds(msg.header.stamp), int(msg.state), float(msg.confidence),
-                       stamp_seconds(msg.onset), scores, str(msg.model_set), str(msg.detail), log_time)
+    return StateSample(to_seconds(msg.header.stamp), int(msg.state), float(msg.confidence),
+                       to_seconds(msg.onset), scores, str(msg.model_set), str(msg.detail), log_time)
 
 
 def bag_storage(path) -> str:
@@ -392,11 +389,11 @@ def read_bag(path, namespace: Optional[str] = None, vibration_topic: str = TOPIC
                                f"{_one_line(exc)}") from None
             log_time = t * 1e-9
             if rel == vibration_topic:
-                out.chunks.append(Chunk(stamp_seconds(msg.header.stamp), int(msg.first_sample_index),
+                out.chunks.append(Chunk(to_seconds(msg.header.stamp), int(msg.first_sample_index),
                                         float(msg.sample_rate), str(msg.source), str(msg.header.frame_id),
                                         np.asarray(msg.samples, dtype=float), log_time))
             elif rel == TOPIC_SPEED:
-                out.speeds.append(SpeedSample(stamp_seconds(msg.header.stamp), float(msg.angular_velocity),
+                out.speeds.append(SpeedSample(to_seconds(msg.header.stamp), float(msg.angular_velocity),
                                               str(msg.source), log_time))
             elif rel == TOPIC_FAULT_STATE:
                 out.fault_states.append(_state_sample(msg, log_time))

@@ -9,11 +9,9 @@ comes from the residuals' stamps and sample indices only, so replays at any
 rate (with ``use_sim_time``) give the same decisions.
 """
 
-import math
 import sys
 
 import numpy as np
-from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -23,6 +21,7 @@ from bearing_observer.chunk_stream import ChunkStream
 from bearing_observer.hw_model import DEFAULT_SETS
 from bearing_sim.fault_states import FaultState
 from bearing_sim.node_main import run_node_main
+from bearing_sim.stamps import to_seconds, to_stamp
 from bearing_sim.ros_parameters import declare
 
 from .decision import Diagnoser, config_for
@@ -31,15 +30,6 @@ from .diagnoser_node_config import PARAMETERS, TOPIC_SPEED, TOPIC_STATE, TOPICS_
 STREAM_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 STATE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 WARN_PERIOD_S = 5.0
-
-
-def seconds(stamp) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
-
-
-def to_stamp(t: float) -> Time:
-    sec = math.floor(t)
-    return Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000)
 
 
 class DiagnoserNode(Node):
@@ -96,7 +86,7 @@ class DiagnoserNode(Node):
     def on_residual(self, hypothesis: FaultState, msg: Residual) -> None:
         self.last_heard[hypothesis] = self.get_clock().now()
         r = np.asarray(msg.residual, dtype=float)
-        stamp = seconds(msg.header.stamp)
+        stamp = to_seconds(msg.header.stamp)
         verdict = self.streams[hypothesis].check(stamp, msg.first_sample_index, msg.sample_rate, r)
         if verdict.accepted and not (len(msg.estimate) == len(msg.impulse_train) == len(r)):
             verdict = None

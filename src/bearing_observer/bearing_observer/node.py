@@ -19,6 +19,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from bearing_msgs.msg import Residual, ShaftSpeed, VibrationChunk
 from bearing_sim.fault_states import parse_fault
 from bearing_sim.node_main import run_node_main
+from bearing_sim.stamps import to_seconds
 from bearing_sim.ros_parameters import declare
 
 from .chunk_stream import ChunkStream
@@ -28,10 +29,6 @@ from .observer_node_config import PARAMETERS, TOPIC_INPUT, TOPIC_SPEED, default_
 
 STREAM_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 WARN_PERIOD_S = 5.0
-
-
-def stamp_seconds(stamp) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
 
 
 class ObserverNode(Node):
@@ -82,7 +79,7 @@ class ObserverNode(Node):
 
     def on_chunk(self, msg: VibrationChunk) -> None:
         y = np.asarray(msg.samples, dtype=float)
-        verdict = self.stream.check(stamp_seconds(msg.header.stamp), msg.first_sample_index, msg.sample_rate, y)
+        verdict = self.stream.check(to_seconds(msg.header.stamp), msg.first_sample_index, msg.sample_rate, y)
         if not verdict.accepted:
             self.get_logger().warn(f"rejected chunk ({dict(self.stream.counts)}): {verdict.reason}",
                                    throttle_duration_sec=WARN_PERIOD_S)

@@ -64,6 +64,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import fft as sp_fft
 from scipy import linalg, signal
 
 from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency as kinematic_frequency
@@ -361,6 +362,7 @@ class FaultObserver:
             self._psi_base, self._chi_base = self._cycles(self._n)
             self._n_base = self._n
         self.rpm = rpm
+        self._cached_trains = None
         self._fr = rpm / 60.0
         self._freq = self.model.fault_order * self._fr
         self._kinematic = kinematic_frequency(DRIVE_END_6205, self.fault, rpm)
@@ -386,6 +388,7 @@ class FaultObserver:
             self._phase_c = 0.0          # impact cycle position estimate (cycles)
             self._gains = np.zeros(3 if self.model.modulated else 1)
         self.explained = 0.0
+        self._cached_trains = None
 
     @property
     def phase(self) -> float:
@@ -420,6 +423,25 @@ class FaultObserver:
         unit = impulse_train(n, fs, self._freq, ph, start_index=i0,
                              pulse_width=self.model.pulse_width)
         return unit, unit[None, :]
+
+    def _cache_trains(self, n_start: int, n_end: int) -> None:
+        """Render the trains for absolute samples ``[n_start, n_end)`` once and keep them
+        for the blocks up to the next update boundary (phase and speed are constant there;
+        a speed change drops the cache). Trains are rendered per sample from the speed
+        anchor, so slicing gives the same values as rendering each block on its own."""
+        plain_only = self.drive_mode == "off"
+        self._cached_trains = (n_start, n_end) + self._trains(n_end - n_start, n_start, plain_only)
+
+    def _block_trains(self, n: int):
+        """Unit train and regressor trains (see :meth:`_trains`) for the next ``n`` samples,
+        which never cross an update boundary."""
+        c = self._cached_trains
+        if c is None or not (c[0] <= self._n and self._n + n <= c[1]):
+            n_end = (self._n // self.update_n + 1) * self.update_n
+            self._cache_trains(self._n, max(n_end, self._n + n))
+            c = self._cached_trains
+        i = self._n - c[0]
+        return c[2][i:i + n], c[3][:, i:i + n]
 
     def _linear(self, w: np.ndarray) -> np.ndarray:
         """Zero-state response of the model's linear block including the delay."""
@@ -462,31 +484,33 @@ class FaultObserver:
         # fault cycle position of the window's samples (from the speed anchor; exact while
         # the speed is constant over the window)
         t = np.arange(self._n - z.size - self._n_base, self._n - self._n_base) / self.sample_rate
-        psi = np.mod(self._psi_base + self._freq * t, 1.0)
+        x = self._psi_base + self._freq * t
+        psi = x - np.floor(x)   # == np.mod(x, 1.0) bit for bit, several times faster
         idx = np.minimum((psi * n_bins).astype(np.int64), n_bins - 1)
         prof = np.bincount(idx, weights=z * z, minlength=n_bins)
         cnt = np.bincount(idx, minlength=n_bins)
         prof = prof / np.maximum(cnt, 1)
         tmpl_f = self._template_profile(n_bins)
-        corr = np.fft.irfft(np.fft.rfft(prof - prof.mean()) * tmpl_f, n_bins)
+        corr = sp_fft.irfft(sp_fft.rfft(prof - prof.mean()) * tmpl_f, n_bins)
         lag = int(np.argmax(corr))
         # sub-bin refinement: vertex of the parabola through the peak and its neighbours
         c0, cm, cp = corr[lag], corr[lag - 1], corr[(lag + 1) % n_bins]
         den = cm - 2.0 * c0 + cp
         frac = 0.5 * (cm - cp) / den if den < 0 else 0.0
         self._phase_c = ((lag + float(np.clip(frac, -0.5, 0.5))) / n_bins) % 1.0
-        # regressors over the window (zero state at the window start; first part discarded)
-        unit, comps = self._trains(z.size, self._n - z.size)
-        R = self._regressors(comps).T
+        # regressors over the window (zero state at the window start; first part discarded);
+        # the trains are rendered through the next update interval in the same call
+        self._cache_trains(self._n - z.size, self._n + self.update_n)
+        R = self._regressors(self._cached_trains[3][:, :z.size])
         skip = min(z.size // 4, int(round(period)))
-        Rw, zw = R[skip:], z[skip:]
+        Rw, zw = R[:, skip:], z[skip:]      # one regressor per row (contiguous rows)
         # normal equations (p <= 3 regressors), ridge-regularised at 1e-9 of the trace
-        G = Rw.T @ Rw
+        G = Rw @ Rw.T
         G[np.diag_indices_from(G)] += 1e-9 * max(float(np.trace(G)), 1e-300)
-        p = np.linalg.solve(G, Rw.T @ zw)
+        p = np.linalg.solve(G, Rw @ zw)
         if not self.model.modulated:
             p = np.maximum(p, 0.0)
-        res = zw - Rw @ p
+        res = zw - p @ Rw
         e = float(zw @ zw)
         self.explained = 1.0 - float(res @ res) / e if e > 0 else 0.0
         self._gains = p if self.explained >= self.min_explained else np.zeros_like(p)
@@ -495,11 +519,10 @@ class FaultObserver:
         n = y.size
         g = self.model.output_nonlinearity
         z_t = g.inverse(y)
+        unit, comps = self._block_trains(n)
         if self.drive_mode == "off" or not np.any(self._gains):
-            unit = self._trains(n, self._n, plain_only=True)[0]
             u = np.zeros(n)
         else:
-            unit, comps = self._trains(n, self._n)
             u = self._gains @ comps
         w = self.model.input_nonlinearity(u) if np.any(u) else np.zeros(n)
         nk = self.model.nk

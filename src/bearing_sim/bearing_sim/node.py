@@ -12,7 +12,6 @@ import sys
 import time
 
 import rclpy
-from builtin_interfaces.msg import Time
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -21,6 +20,7 @@ from bearing_msgs.msg import FaultState as FaultStateMsg, ShaftSpeed, VibrationC
 
 from .fault_states import FaultState
 from .node_main import run_node_main
+from .stamps import to_stamp
 from .ros_parameters import declare
 from .sim_node_config import (PARAMETERS, SOURCE, TOPIC_SHAFT_SPEED, TOPIC_TRUTH, TOPIC_UNBALANCE,
                               TOPIC_VIBRATION, build_run, parse_wait_spec)
@@ -32,11 +32,6 @@ RTF_LOG_PERIOD_S = 5.0  # wall seconds between real-time-factor log lines
 STREAM_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 TRUTH_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
-
-
-def to_stamp(seconds: float) -> Time:
-    sec = math.floor(seconds)
-    return Time(sec=int(sec), nanosec=int(round((seconds - sec) * 1e9)) % 1_000_000_000)
 
 
 class SimulatorNode(Node):
