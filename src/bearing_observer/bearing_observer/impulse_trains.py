@@ -25,6 +25,8 @@ import math
 
 import numpy as np
 
+from .render_kernel import add_pulses
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -78,14 +80,7 @@ def _render(n: int, sample_rate: float, start_time: float, t_k: np.ndarray,
     a = (t_k - start_time) * sample_rate - start_index
     b = a + pulse_width * sample_rate
     span = int(math.ceil(pulse_width * sample_rate)) + 1
-    first = np.floor(a).astype(np.int64)
-    idx = first[:, None] + np.arange(span + 1)[None, :]
-    # Overlap of [idx, idx+1) with [a, b), in samples (= fraction of the sample interval).
-    overlap = np.clip(np.minimum(idx + 1.0, b[:, None]) - np.maximum(idx, a[:, None]), 0.0, None)
-    ok = (idx >= 0) & (idx < n) & (overlap > 0.0)
-    sel = idx[ok]
-    for j in range(w2.shape[0]):
-        out[j] = np.bincount(sel, weights=(overlap * w2[j][:, None])[ok], minlength=n)
+    add_pulses(out, a, b, np.ascontiguousarray(w2), span)
     return out if multi else out[0]
 
 

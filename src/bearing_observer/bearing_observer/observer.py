@@ -425,10 +425,12 @@ class FaultObserver:
         return unit, unit[None, :]
 
     def _cache_trains(self, n_start: int, n_end: int) -> None:
-        """Render the trains for absolute samples ``[n_start, n_end)`` once and keep them
-        for the blocks up to the next update boundary (phase and speed are constant there;
-        a speed change drops the cache). Trains are rendered per sample from the speed
-        anchor, so slicing gives the same values as rendering each block on its own."""
+        """Render the trains (see :meth:`_trains`) for absolute sample indices
+        ``[n_start, n_end)`` in one call and keep them for the blocks up to the next update
+        boundary (phase and speed are constant there; a speed change drops the cache).
+        Pulse positions are computed per sample from the speed anchor, so a slice equals
+        the block rendered on its own (to rounding of the sub-sample position, ~1e-12) and
+        does not depend on how the stream is chunked."""
         plain_only = self.drive_mode == "off"
         self._cached_trains = (n_start, n_end) + self._trains(n_end - n_start, n_start, plain_only)
 
@@ -437,8 +439,7 @@ class FaultObserver:
         which never cross an update boundary."""
         c = self._cached_trains
         if c is None or not (c[0] <= self._n and self._n + n <= c[1]):
-            n_end = (self._n // self.update_n + 1) * self.update_n
-            self._cache_trains(self._n, max(n_end, self._n + n))
+            self._cache_trains(self._n, (self._n // self.update_n + 1) * self.update_n)
             c = self._cached_trains
         i = self._n - c[0]
         return c[2][i:i + n], c[3][:, i:i + n]
@@ -497,7 +498,7 @@ class FaultObserver:
         c0, cm, cp = corr[lag], corr[lag - 1], corr[(lag + 1) % n_bins]
         den = cm - 2.0 * c0 + cp
         frac = 0.5 * (cm - cp) / den if den < 0 else 0.0
-        self._phase_c = ((lag + float(np.clip(frac, -0.5, 0.5))) / n_bins) % 1.0
+        self._phase_c = ((lag + min(max(float(frac), -0.5), 0.5)) / n_bins) % 1.0
         # regressors over the window (zero state at the window start; first part discarded);
         # the trains are rendered through the next update interval in the same call
         self._cache_trains(self._n - z.size, self._n + self.update_n)
@@ -506,7 +507,7 @@ class FaultObserver:
         Rw, zw = R[:, skip:], z[skip:]      # one regressor per row (contiguous rows)
         # normal equations (p <= 3 regressors), ridge-regularised at 1e-9 of the trace
         G = Rw @ Rw.T
-        G[np.diag_indices_from(G)] += 1e-9 * max(float(np.trace(G)), 1e-300)
+        G.flat[::G.shape[0] + 1] += 1e-9 * max(float(np.trace(G)), 1e-300)
         p = np.linalg.solve(G, Rw @ zw)
         if not self.model.modulated:
             p = np.maximum(p, 0.0)
