@@ -16,6 +16,12 @@ import sys
 import time
 import traceback
 
+# Per-core figures: one BLAS thread (numpy would otherwise spread small solves over both
+# cores, and process CPU time would count them twice). Set before the benchmark modules
+# import numpy (they are imported in main()).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
 MODULES = (
     "bearing_sim.sim_benchmarks",
     "bearing_observer.obs_benchmarks",

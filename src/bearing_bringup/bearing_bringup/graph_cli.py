@@ -78,6 +78,7 @@ def main(argv=None) -> int:
     runnable = [s for s in GRAPH if not any(m.startswith(f"{s.name} ") for m in missing)]
 
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # a demo stays on this machine
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # nodes solve small systems: BLAS threads only contend
     from .graph_watcher import GraphWatcher  # rclpy: imported only when the graph runs
 
     watcher = GraphWatcher(args.namespace)
