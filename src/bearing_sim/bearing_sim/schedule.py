@@ -10,11 +10,9 @@ from .fault_states import FaultState, parse_fault
 
 DEFAULT_SEGMENT_DURATION = 0.2  #: s, per scenario segment (CONTRACT.md)
 
-_SHORT = {"normal": FaultState.NORMAL, "or": FaultState.OUTER_RACE, "ir": FaultState.INNER_RACE}
-
 #: The thesis cases: name -> sequence of states.
 SCENARIOS = {
-    name: tuple(_SHORT[part] for part in name.split("-"))
+    name: tuple(parse_fault(part) for part in name.split("-"))
     for name in ("normal", "or", "ir", "or-ir", "ir-or", "or-normal", "normal-or", "ir-normal", "normal-ir")
 }
 
