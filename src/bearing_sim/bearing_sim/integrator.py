@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 
 from .model_parameters import P_OMD, P_OMI, P_OMO
-from .rotor_rhs import FASTMATH, rhs_trig, trig_at, NSTATE, NDOF, WORK_LEN
+from .rotor_rhs import FASTMATH, rhs_into, rhs_trig, trig_at, NSTATE, NDOF, WORK_LEN
 
 # Dormand-Prince 5(4) tableau
 C2, C3, C4, C5 = 1 / 5, 3 / 10, 4 / 5, 8 / 9
@@ -78,6 +78,13 @@ def _rotate(base, om, d, trig):
         trig[2 * j + 1] = s0 * cx + c0 * sx
 
 
+@njit(cache=True, error_model="numpy", fastmath=FASTMATH, inline="always")
+def _dense_weight(s, th):
+    """Weight of stage s in the dense-output derivative at step fraction th
+    (``DENSE_D`` row s as a cubic in th; row 1 is zero, so k_1 never enters)."""
+    return DENSE_D[s, 0] + th * (DENSE_D[s, 1] + th * (DENSE_D[s, 2] + th * DENSE_D[s, 3]))
+
+
 @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
 def integrate_interval(t, t_end, y, h, h_max, p, ct0, st0, or_rel, ir_rel, rtol, atol,
                        fine_dt, n_next, fine_out, comp, stats, state):
@@ -89,9 +96,10 @@ def integrate_interval(t, t_end, y, h, h_max, p, ct0, st0, or_rel, ir_rel, rtol,
     Returns (h_next, n_written, ok); ok is False if the step size collapsed or the
     state became non-finite.
     """
-    n = y.shape[0]
-    k = np.empty((7, n))
-    ytmp = np.empty(n)
+    n = NSTATE
+    # stage derivatives k_s in one flat array, k_s[i] = k[s * n + i] (written
+    # through an offset: a row view k[s] would cost reference counting per call)
+    k = np.empty(7 * n)
     ynew = np.empty(n)
     work = np.empty(WORK_LEN)
     base = np.empty(6)
@@ -101,7 +109,7 @@ def integrate_interval(t, t_end, y, h, h_max, p, ct0, st0, or_rel, ir_rel, rtol,
     om[1] = p[P_OMO]
     om[2] = p[P_OMD]
     trig_at(t, p, base)
-    rhs_trig(y, p, ct0, st0, or_rel, ir_rel, k[0], work, base)
+    rhs_trig(y, p, ct0, st0, or_rel, ir_rel, k[:n], work, base)  # once per call: not inlined
     stats[STAT_RHS] += 1
     n_written = 0
     err_old = state[0]
@@ -119,37 +127,42 @@ def integrate_interval(t, t_end, y, h, h_max, p, ct0, st0, or_rel, ir_rel, rtol,
             last = True
         if h < 1e-14:
             return h_keep, n_written, False
-        for i in range(n):
-            ytmp[i] = y[i] + h * A21 * k[0, i]
-        _rotate(base, om, C2 * h, trig)
-        rhs_trig(ytmp, p, ct0, st0, or_rel, ir_rel, k[1], work, trig)
-        for i in range(n):
-            ytmp[i] = y[i] + h * (A31 * k[0, i] + A32 * k[1, i])
-        _rotate(base, om, C3 * h, trig)
-        rhs_trig(ytmp, p, ct0, st0, or_rel, ir_rel, k[2], work, trig)
-        for i in range(n):
-            ytmp[i] = y[i] + h * (A41 * k[0, i] + A42 * k[1, i] + A43 * k[2, i])
-        _rotate(base, om, C4 * h, trig)
-        rhs_trig(ytmp, p, ct0, st0, or_rel, ir_rel, k[3], work, trig)
-        for i in range(n):
-            ytmp[i] = y[i] + h * (A51 * k[0, i] + A52 * k[1, i] + A53 * k[2, i] + A54 * k[3, i])
-        _rotate(base, om, C5 * h, trig)
-        rhs_trig(ytmp, p, ct0, st0, or_rel, ir_rel, k[4], work, trig)
-        for i in range(n):
-            ytmp[i] = y[i] + h * (A61 * k[0, i] + A62 * k[1, i] + A63 * k[2, i] + A64 * k[3, i]
-                                  + A65 * k[4, i])
+        # stages 2..7 (one inlined right-hand side in the loop); the stage states
+        # go to ynew, the last one is the 5th-order solution whose derivative
+        # k6 is the next step's first stage (FSAL)
+        for st in range(1, 7):
+            if st == 1:
+                for i in range(n):
+                    ynew[i] = y[i] + h * A21 * k[i]
+                _rotate(base, om, C2 * h, trig)
+            elif st == 2:
+                for i in range(n):
+                    ynew[i] = y[i] + h * (A31 * k[i] + A32 * k[1 * n + i])
+                _rotate(base, om, C3 * h, trig)
+            elif st == 3:
+                for i in range(n):
+                    ynew[i] = y[i] + h * (A41 * k[i] + A42 * k[1 * n + i] + A43 * k[2 * n + i])
+                _rotate(base, om, C4 * h, trig)
+            elif st == 4:
+                for i in range(n):
+                    ynew[i] = y[i] + h * (A51 * k[i] + A52 * k[1 * n + i] + A53 * k[2 * n + i] + A54 * k[3 * n + i])
+                _rotate(base, om, C5 * h, trig)
+            elif st == 5:
+                for i in range(n):
+                    ynew[i] = y[i] + h * (A61 * k[i] + A62 * k[1 * n + i] + A63 * k[2 * n + i] + A64 * k[3 * n + i]
+                                          + A65 * k[4 * n + i])
+                _rotate(base, om, h, trig)
+            else:
+                for i in range(n):
+                    ynew[i] = y[i] + h * (A71 * k[i] + A73 * k[2 * n + i] + A74 * k[3 * n + i] + A75 * k[4 * n + i]
+                                          + A76 * k[5 * n + i])
+            rhs_into(ynew, p, ct0, st0, or_rel, ir_rel, k, st * n, work, trig)
         t_new = t_end if last else t + h
-        _rotate(base, om, h, trig)
-        rhs_trig(ytmp, p, ct0, st0, or_rel, ir_rel, k[5], work, trig)
-        for i in range(n):
-            ynew[i] = y[i] + h * (A71 * k[0, i] + A73 * k[2, i] + A74 * k[3, i] + A75 * k[4, i]
-                                  + A76 * k[5, i])
-        rhs_trig(ynew, p, ct0, st0, or_rel, ir_rel, k[6], work, trig)
         stats[STAT_RHS] += 6
         err = 0.0
         for i in range(n):
-            e = h * (E1 * k[0, i] + E3 * k[2, i] + E4 * k[3, i] + E5 * k[4, i] + E6 * k[5, i]
-                     + E7 * k[6, i])
+            e = h * (E1 * k[i] + E3 * k[2 * n + i] + E4 * k[3 * n + i] + E5 * k[4 * n + i] + E6 * k[5 * n + i]
+                     + E7 * k[6 * n + i])
             sc = atol[i] + rtol * max(abs(y[i]), abs(ynew[i]))
             err += (e / sc) ** 2
         err = np.sqrt(err / n)
@@ -169,10 +182,9 @@ def integrate_interval(t, t_end, y, h, h_max, p, ct0, st0, or_rel, ir_rel, rtol,
                 if n_written >= fine_out.shape[0]:  # caller's buffer too small
                     return h, n_written, False
                 th = (tn - t) / h
-                acc = 0.0
-                for s in range(7):
-                    acc += k[s, comp] * (DENSE_D[s, 0] + th * (DENSE_D[s, 1] + th * (DENSE_D[s, 2] + th * DENSE_D[s, 3])))
-                fine_out[n_written] = acc
+                fine_out[n_written] = (k[comp] * _dense_weight(0, th) + k[2 * n + comp] * _dense_weight(2, th)
+                                       + k[3 * n + comp] * _dense_weight(3, th) + k[4 * n + comp] * _dense_weight(4, th)
+                                       + k[5 * n + comp] * _dense_weight(5, th) + k[6 * n + comp] * _dense_weight(6, th))
                 n_written += 1
             fac = fac11 / max(err_old, 1e-4) ** beta
             fac = max(0.1, min(5.0, fac / 0.9))
@@ -184,8 +196,10 @@ def integrate_interval(t, t_end, y, h, h_max, p, ct0, st0, or_rel, ir_rel, rtol,
             t = t_new
             for i in range(n):
                 y[i] = ynew[i]
-                k[0, i] = k[6, i]
-            trig_at(t, p, base)
+                k[i] = k[6 * n + i]
+            # the angles at the new t: the last stage's rotation (no libm call)
+            for j in range(6):
+                base[j] = trig[j]
             if last:
                 h = max(h_new, h_keep) if err < 0.5 else h_new
                 break

@@ -30,9 +30,10 @@ subtracted from the inner-race radius (IR defect).
 Two implementations of the same equations: ``rhs_reference`` (separate
 ``generalized_forces`` and ``solve_mass``, entries as in the listing, the
 contact distance computed directly) and the fused fast path ``rhs`` /
-``rhs_trig`` used by the integrator (one pass per bearing; the contact
-distance expanded to O(tn^4) < 1e-15 relative; sum c^2 = sum s^2 = N/2 for the
-equally spaced balls). The unit tests hold them equal to 1e-10.
+``rhs_trig`` / ``rhs_into`` (the last one inlined into the integrator; one pass
+per bearing; the contact distance expanded to O(tn^4) < 1e-15 relative; sum c^2
+= sum s^2 = N/2 for the equally spaced balls). The unit tests hold them equal to
+1e-10.
 """
 
 import math
@@ -219,10 +220,10 @@ WORK_LEN = NDOF + 34
 
 
 @njit(cache=True, error_model="numpy", fastmath=FASTMATH, inline="always")
-def _bearing_fused(ca, sa, y, p, ct0, st0, rel_o, rel_i, use_rel, dy, cs, sn,
+def _bearing_fused(ca, sa, y, p, ct0, st0, rel_o, rel_i, use_rel, dy, o, cs, sn,
                    ix, b0, nb, boff, m, om, k_in, k_out, rho, r_in, r_out, rnom, kappa):
     """One bearing of the fast path: contact/damping/stiffness terms, ball rows of
-    -G written to dy, and the sums the Schur complement needs.
+    -G written to dy[o:o + 58], and the sums the Schur complement needs.
 
     Returns (Gx, Gy, Ghx, Ghy) of the shaft and housing rows and
     (sum c b, sum s b, sum c^2, sum c s, sum s^2) over the balls."""
@@ -263,19 +264,20 @@ def _bearing_fused(ca, sa, y, p, ct0, st0, rel_o, rel_i, use_rel, dy, cs, sn,
             ro += rel_o[i]
             ri -= rel_i[i]
         gb = 2.0 * cv * vb + cv * (c * dvx + s * dvy) + kap_c * mom * (c * vys - s * vxs) - mom2 * r
-        d_out = X - ro
-        if d_out > 0.0:
-            f = k_out * d_out * math.sqrt(d_out)
-            rad = f * (1.0 - half_t2)
-            tan = f * tn
-            fx += c * rad - s * tan
-            fy += s * rad + c * tan
-            gb += rad
-        d_in = ri - r
-        if d_in > 0.0:
-            gb -= k_in * d_in * math.sqrt(d_in)
+        # Hertz k delta^1.5 (eqs. 2.9-2.10) for compression only, branch-free:
+        # delta = max(d, 0) gives exactly 0 for a ball out of contact (no
+        # mispredicted branches as balls enter and leave the load zone)
+        d_out = max(X - ro, 0.0)
+        f = k_out * d_out * math.sqrt(d_out)
+        rad = f * (1.0 - half_t2)
+        tan = f * tn
+        fx += c * rad - s * tan
+        fy += s * rad + c * tan
+        d_in = max(ri - r, 0.0)
+        gb += rad
+        gb -= k_in * d_in * math.sqrt(d_in)
         b = -gb
-        dy[29 + b0 + i] = b
+        dy[o + 29 + b0 + i] = b
         scb += c * b
         ssb += s * b
         scv += c * vb
@@ -325,7 +327,18 @@ def trig_at(t, p, trig):
 
 @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
 def rhs_trig(y, p, ct0, st0, or_rel, ir_rel, dy, work, trig):
-    """dy = f(t, y) for y = [q, q'] (58 states): the fast, fused path.
+    """dy = f(t, y) for y = [q, q'] (58 states): the fast, fused path, see
+    :func:`rhs_into` (here with dy of its own, offset 0)."""
+    rhs_into(y, p, ct0, st0, or_rel, ir_rel, dy, 0, work, trig)
+
+
+@njit(cache=True, error_model="numpy", fastmath=FASTMATH, inline="always")
+def rhs_into(y, p, ct0, st0, or_rel, ir_rel, dy, o, work, trig):
+    """dy[o:o + 58] = f(t, y) for y = [q, q'] (58 states): the fast, fused path.
+
+    Inlined into its callers; the offset ``o`` lets the integrator keep all its
+    stage derivatives in one flat array (a row view would cost reference
+    counting per call).
 
     Time enters only through ``trig`` = (cos, sin) of Omega_i t, Omega_o t and
     omega_d t + phi_mu (see :func:`trig_at`; the integrator rotates them to its
@@ -338,10 +351,10 @@ def rhs_trig(y, p, ct0, st0, or_rel, ir_rel, dy, work, trig):
     """
     cs1 = work[0:9]; sn1 = work[9:18]; cs2 = work[18:26]; sn2 = work[26:34]
     Gx1, Gy1, Ghx1, Ghy1, scb1, ssb1, scc1, scs1, sss1 = _bearing_fused(
-        trig[0], trig[1], y, p, ct0, st0, or_rel, ir_rel, True, dy, cs1, sn1,
+        trig[0], trig[1], y, p, ct0, st0, or_rel, ir_rel, True, dy, o, cs1, sn1,
         0, 4, 9, 0, p[P_MI], p[P_OMI], p[P_K1I], p[P_K2I], p[P_RHO1], p[P_R1], p[P_RR1], p[P_RNOM1], 1.0)
     Gx2, Gy2, Ghx2, Ghy2, scb2, ssb2, scc2, scs2, sss2 = _bearing_fused(
-        trig[2], trig[3], y, p, ct0, st0, or_rel, ir_rel, False, dy, cs2, sn2,
+        trig[2], trig[3], y, p, ct0, st0, or_rel, ir_rel, False, dy, o, cs2, sn2,
         21, 13, 8, 9, p[P_MO], p[P_OMO], p[P_K1O], p[P_K2O], p[P_RHO2], p[P_R2], p[P_RR2], p[P_RNOM2], 1.0)
     ks = p[P_KS]; L = p[P_L]
     q25 = y[25]; q26 = y[26]; q27 = y[27]; q28 = y[28]
@@ -359,7 +372,7 @@ def rhs_trig(y, p, ct0, st0, or_rel, ir_rel, dy, work, trig):
     G27 = ipw * y[v + 28] - ks * L * y[1] + ks * L * y[22] + 2 * ks * L * L * q27
     G28 = -ipw * y[v + 27] + ks * L * y[0] - ks * L * y[21] + 2 * ks * L * L * q28
     for i in range(29):
-        dy[i] = y[29 + i]
+        dy[o + i] = y[29 + i]
     # arrow blocks
     m = p[P_MI]; ms = p[P_MS_DE]
     s11 = ms - m * scc1; s12 = -m * scs1; s22 = ms - m * sss1
@@ -367,31 +380,31 @@ def rhs_trig(y, p, ct0, st0, or_rel, ir_rel, dy, work, trig):
     det = s11 * s22 - s12 * s12
     ax = (s22 * r1 - s12 * r2) / det
     ay = (s11 * r2 - s12 * r1) / det
-    dy[29] = ax; dy[30] = ay
+    dy[o + 29] = ax; dy[o + 30] = ay
     im = 1.0 / m
     for i in range(9):
-        dy[33 + i] = dy[33 + i] * im - (cs1[i] * ax + sn1[i] * ay)
+        dy[o + 33 + i] = dy[o + 33 + i] * im - (cs1[i] * ax + sn1[i] * ay)
     m = p[P_MO]; ms = p[P_MS_FE]; kap = p[P_KAPPA_FE]
     s11 = ms - kap * m * scc2; s12 = -kap * m * scs2; s22 = ms - kap * m * sss2
     r1 = -Gx2 - scb2; r2 = -Gy2 - ssb2
     det = s11 * s22 - s12 * s12
     ax = (s22 * r1 - s12 * r2) / det
     ay = (s11 * r2 - s12 * r1) / det
-    dy[50] = ax; dy[51] = ay
+    dy[o + 50] = ax; dy[o + 51] = ay
     im = 1.0 / m
     for i in range(8):
-        dy[42 + i] = dy[42 + i] * im - kap * (cs2[i] * ax + sn2[i] * ay)
+        dy[o + 42 + i] = dy[o + 42 + i] * im - kap * (cs2[i] * ax + sn2[i] * ay)
     A = p[P_MH_A]; B = p[P_MH_B]
     idet = 1.0 / (A * A - B * B)
-    dy[31] = (-A * Ghx1 + B * Ghx2) * idet
-    dy[52] = (-A * Ghx2 + B * Ghx1) * idet
-    dy[32] = (-A * Ghy1 + B * Ghy2) * idet
-    dy[53] = (-A * Ghy2 + B * Ghy1) * idet
+    dy[o + 31] = (-A * Ghx1 + B * Ghx2) * idet
+    dy[o + 52] = (-A * Ghx2 + B * Ghx1) * idet
+    dy[o + 32] = (-A * Ghy1 + B * Ghy2) * idet
+    dy[o + 53] = (-A * Ghy2 + B * Ghy1) * idet
     imd = 1.0 / p[P_MD]; iit = 1.0 / p[P_ITD]
-    dy[54] = -G25 * imd
-    dy[55] = -G26 * imd
-    dy[56] = -G27 * iit
-    dy[57] = -G28 * iit
+    dy[o + 54] = -G25 * imd
+    dy[o + 55] = -G26 * imd
+    dy[o + 56] = -G27 * iit
+    dy[o + 57] = -G28 * iit
 
 
 def make_rhs_args(params):
