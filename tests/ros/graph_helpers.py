@@ -59,3 +59,18 @@ def stop(member, timeout=15.0):
     if member.returncode is None:
         os.killpg(member.process.pid, signal.SIGINT)
     return member.process.wait(timeout=timeout)
+
+
+def replay_into_pipeline(ros_graph, bag, *play_options):
+    """Start fresh observers + diagnoser, wait until the diagnoser listens, play ``bag``'s
+    vibration and shaft speed into them (both observers matched first); return the player."""
+    start_pipeline(ros_graph)
+    ros_graph.wait_until(lambda: all(ros_graph.node.count_subscribers(t) >= 1
+                                     for t in ("residual/outer_race", "residual/inner_race")),
+                         60.0, "the diagnoser to be ready")
+    player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
+        "play", str(bag), "--topics", "vibration/drive_end", "shaft_speed", "--wait-for-subscribers", "2",
+        *play_options])
+    ros_graph.wait_until(lambda: player.returncode is not None, 120.0, "the replay to finish")
+    assert player.returncode == 0, ros_graph.output()
+    return player

@@ -18,8 +18,8 @@ import subprocess
 import pytest
 
 from bearing_msgs.msg import FaultState
-from graph_helpers import (BAG_CLI, LATCHED_ALL, STATE_CODES, live_states, params_file, start_pipeline, stop,
-                           transitions, wait_quiet)
+from graph_helpers import (BAG_CLI, LATCHED_ALL, STATE_CODES, live_states, params_file, replay_into_pipeline,
+                           start_pipeline, stop, transitions, wait_quiet)
 from ros_harness import executable
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -57,15 +57,7 @@ def test_live_run_replay_and_offline_agree(ros_graph, tmp_path):
 
     # 2. replay into fresh observers + diagnoser
     replayed = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
-    start_pipeline(ros_graph)
-    ros_graph.wait_until(lambda: all(ros_graph.node.count_subscribers(t) >= 1
-                                     for t in ("residual/outer_race", "residual/inner_race")),
-                         60.0, "the fresh diagnoser to be ready")
-    player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
-        "play", str(bag), "--topics", "vibration/drive_end", "shaft_speed",
-        "--wait-for-subscribers", "2", "--rate", "1"])  # 2: both observers matched before the first chunk
-    ros_graph.wait_until(lambda: player.returncode is not None, 120.0, "the replay to finish")
-    assert player.returncode == 0, ros_graph.output()
+    replay_into_pipeline(ros_graph, bag, "--rate", "1")
     wait_quiet(ros_graph, replayed, "the replayed diagnosis to settle")
     again = live_states(replayed)
     assert [s for s, _ in again] == [s for s, _ in recorded], (again, recorded)

@@ -13,7 +13,7 @@ import subprocess
 import pytest
 
 from bearing_msgs.msg import FaultState
-from graph_helpers import BAG_CLI, LATCHED_ALL, STATE_CODES, live_states, start_pipeline, transitions, wait_quiet
+from graph_helpers import BAG_CLI, LATCHED_ALL, STATE_CODES, live_states, replay_into_pipeline, transitions, wait_quiet
 from ros_harness import executable
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -38,14 +38,7 @@ def test_recording_through_the_live_graph_matches_offline(ros_graph, tmp_path, c
     assert convert.returncode == 0, convert.stderr
 
     states = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
-    start_pipeline(ros_graph)
-    ros_graph.wait_until(lambda: all(ros_graph.node.count_subscribers(t) >= 1
-                                     for t in ("residual/outer_race", "residual/inner_race")),
-                         60.0, "the diagnoser to be ready")
-    player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
-        "play", str(bag), "--topics", "vibration/drive_end", "shaft_speed", "--wait-for-subscribers", "2"])
-    ros_graph.wait_until(lambda: player.returncode is not None, 120.0, "the replay to finish")
-    assert player.returncode == 0, ros_graph.output()
+    replay_into_pipeline(ros_graph, bag)
     wait_quiet(ros_graph, states, "the live diagnosis to settle")
     live = live_states(states)
     assert live[-1][0] == expected, (live, ros_graph.output())
