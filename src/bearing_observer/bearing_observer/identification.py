@@ -49,7 +49,7 @@ from bearing_sim.fault_states import FaultState, parse_fault
 
 from .hw_model import HWModel
 from .impulse_trains import TWO_PI, impact_times, impulse_train
-from .piecewise_linear import MonotonePiecewiseLinear
+from .piecewise_linear import MonotonePiecewiseLinear, evaluate_piecewise_linear
 
 #: Default orders (nb, nf, nk) per fault type, chosen with the order search on the
 #: simulator at 48 kHz (see ``identify_cli --order-search``).
@@ -301,9 +301,7 @@ def hw_fit(u, y, nb: int, nf: int, nk: int, n_breakpoints: int = N_BREAKPOINTS,
         bb, ff, th = unpack(p)
         v = _g_from_params(knots, th, i0)
         x = _delay(signal.lfilter(bb, ff, u), nk)
-        s_lo = (v[1] - v[0]) / (knots[1] - knots[0])
-        s_hi = (v[-1] - v[-2]) / (knots[-1] - knots[-2])
-        return MonotonePiecewiseLinear._eval(knots, v, s_lo, s_hi, x)
+        return evaluate_piecewise_linear(knots, v, x)
 
     def resid(p):
         return predict(p) - y

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from .render_kernel import add_pulses
+from .kernels import add_pulses
 
 TWO_PI = 2.0 * math.pi
 

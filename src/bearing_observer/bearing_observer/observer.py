@@ -15,9 +15,10 @@ difference equation)::
 with ``(A, B, C, D)`` a balanced realization of ``B(q)/F(q)`` (the pure delay ``q^-nk`` is
 applied to ``w`` by a carried sample buffer, not kept in the state vector). Substituting,
 ``z_hat`` is the output of one LTI system with two inputs, ``w`` and ``z_tilde``, and state
-matrix ``A - L C``; each input path is run as second-order sections with
-``scipy.signal.sosfilt`` and carried filter state, so chunked processing equals one-shot
-processing and no per-sample Python loop runs.
+matrix ``A - L C``. With ``L = 0`` that system is ``B/F`` driven by ``w`` alone, run by
+``scipy.signal.lfilter``; otherwise it is run in modal form (:class:`ModalFilter`, a
+compiled loop). Both carry their state between calls, so chunked processing equals
+one-shot processing, and no per-sample Python loop runs.
 
 Observer gain (pole choice). ``poles`` may be
 
@@ -72,6 +73,7 @@ from bearing_sim.fault_states import FaultState
 
 from .hw_model import HWModel, load_model_set
 from .impulse_trains import TWO_PI, impulse_train, modulated_train_components
+from .kernels import fold_energy, run_modes
 
 
 @dataclass
@@ -108,13 +110,13 @@ def _delayed(x: np.ndarray, buf: np.ndarray):
 
 
 class ModalFilter:
-    """The observer's error dynamics as decoupled first-order modes (vectorised, exact state).
+    """The observer's error dynamics as decoupled first-order modes (exact state).
 
     ``x[n+1] = Ao x[n] + Bw w[n] + Bz z[n]``, ``out[n] = C x[n] + D w[n]`` with
-    ``Ao = V diag(lam) V^-1``: each mode ``xi_i[n+1] = lam_i xi_i[n] + v_i[n]`` runs through
-    ``scipy.signal.lfilter`` (one complex first-order filter per mode, one per conjugate
-    pair), its state carried between calls. No transfer-function polynomials are formed
-    (they are badly conditioned for poles near z = 1).
+    ``Ao = V diag(lam) V^-1``: each mode ``xi_i[n+1] = lam_i xi_i[n] + v_i[n]`` (one complex
+    mode per conjugate pair) runs in the compiled :func:`~bearing_observer.kernels.run_modes`,
+    its state carried between calls. No transfer-function polynomials are formed (they are
+    badly conditioned for poles near z = 1).
     """
 
     def __init__(self, Ao, Bw, Bz, C, D):
@@ -123,11 +125,11 @@ class ModalFilter:
             raise ValueError("observer poles give a nearly defective A - L C; choose distinct poles")
         Vi = linalg.inv(V)
         keep = lam.imag >= 0.0
-        self.lam = lam[keep]
+        self.lam = np.ascontiguousarray(lam[keep])
         self.weight = np.where(self.lam.imag > 0.0, 2.0, 1.0)
-        self.bw = (Vi @ Bw)[keep, 0]
-        self.bz = (Vi @ Bz)[keep, 0]
-        self.c = (C @ V)[0, keep]
+        self.bw = np.ascontiguousarray((Vi @ Bw)[keep, 0])
+        self.bz = np.ascontiguousarray((Vi @ Bz)[keep, 0])
+        self.c = np.ascontiguousarray((C @ V)[0, keep])
         self.d = float(D[0, 0])
         self.reset()
 
@@ -135,12 +137,10 @@ class ModalFilter:
         self.state = np.zeros(self.lam.size, dtype=complex)
 
     def run(self, w: np.ndarray, z: np.ndarray) -> np.ndarray:
-        out = self.d * w
-        for i, lam in enumerate(self.lam):
-            v = self.bw[i] * w + self.bz[i] * z
-            xi, zf = signal.lfilter([0.0, 1.0], [1.0, -lam], v, zi=self.state[i:i + 1])
-            self.state[i] = zf[0]
-            out = out + self.weight[i] * np.real(self.c[i] * xi)
+        out = np.empty(w.size)
+        run_modes(self.lam, self.bw, self.bz, self.c, self.weight, self.d,
+                  np.ascontiguousarray(w, dtype=float), np.ascontiguousarray(z, dtype=float),
+                  self.state, out)
         return out
 
 
@@ -458,12 +458,15 @@ class FaultObserver:
             x = np.concatenate([np.zeros((x.shape[0], nk)), x[:, :-nk]], axis=1)
         return x
 
-    def _template_profile(self, n_bins: int) -> np.ndarray:
+    def _template_spectrum(self, n_bins: int):
+        """FFT length and conjugate spectrum of the zero-padded template fold (cached)."""
         key = (n_bins, self._freq)
         if key not in self._template_cache:
             if len(self._template_cache) > 16:
                 self._template_cache.clear()
-            self._template_cache[key] = np.conj(np.fft.rfft(self._make_template(n_bins)))
+            n_fft = sp_fft.next_fast_len(2 * n_bins, real=True)
+            self._template_cache[key] = (
+                n_fft, np.conj(sp_fft.rfft(self._make_template(n_bins), n_fft)))
         return self._template_cache[key]
 
     def _make_template(self, n_bins: int) -> np.ndarray:
@@ -481,18 +484,18 @@ class FaultObserver:
         if z.size < self.window_n // 2:
             return
         period = self.sample_rate / self._freq
+        # two bins per sample of the period: every bin gets samples (another count leaves a
+        # beat pattern of empty bins that the one-period template does not share)
         n_bins = int(min(1024, max(16, round(2 * period))))
         # fault cycle position of the window's samples (from the speed anchor; exact while
         # the speed is constant over the window)
-        t = np.arange(self._n - z.size - self._n_base, self._n - self._n_base) / self.sample_rate
-        x = self._psi_base + self._freq * t
-        psi = x - np.floor(x)   # == np.mod(x, 1.0) bit for bit, several times faster
-        idx = np.minimum((psi * n_bins).astype(np.int64), n_bins - 1)
-        prof = np.bincount(idx, weights=z * z, minlength=n_bins)
-        cnt = np.bincount(idx, minlength=n_bins)
-        prof = prof / np.maximum(cnt, 1)
-        tmpl_f = self._template_profile(n_bins)
-        corr = sp_fft.irfft(sp_fft.rfft(prof - prof.mean()) * tmpl_f, n_bins)
+        prof = fold_energy(z, self._n - z.size - self._n_base, self._psi_base, self._freq,
+                           self.sample_rate, n_bins)
+        # circular cross-correlation with the template, as the wrapped linear correlation
+        # at a fast FFT length >= 2 n_bins (n_bins itself is often a large prime)
+        n_fft, tmpl_f = self._template_spectrum(n_bins)
+        lin = sp_fft.irfft(sp_fft.rfft(prof - prof.mean(), n_fft) * tmpl_f, n_fft)
+        corr = lin[:n_bins] + lin[n_fft - n_bins:]
         lag = int(np.argmax(corr))
         # sub-bin refinement: vertex of the parabola through the peak and its neighbours
         c0, cm, cp = corr[lag], corr[lag - 1], corr[(lag + 1) % n_bins]
@@ -507,13 +510,16 @@ class FaultObserver:
         Rw, zw = R[:, skip:], z[skip:]      # one regressor per row (contiguous rows)
         # normal equations (p <= 3 regressors), ridge-regularised at 1e-9 of the trace
         G = Rw @ Rw.T
-        G.flat[::G.shape[0] + 1] += 1e-9 * max(float(np.trace(G)), 1e-300)
-        p = np.linalg.solve(G, Rw @ zw)
+        r = Rw @ zw
+        ridge = 1e-9 * max(float(np.trace(G)), 1e-300) * np.eye(G.shape[0])
+        p = np.linalg.solve(G + ridge, r)
         if not self.model.modulated:
             p = np.maximum(p, 0.0)
-        res = zw - p @ Rw
+        # explained energy 1 - |zw - p Rw|^2 / |zw|^2, the residual energy expanded as
+        # |zw|^2 - 2 p.r + p G p (no pass over the samples)
         e = float(zw @ zw)
-        self.explained = 1.0 - float(res @ res) / e if e > 0 else 0.0
+        res_energy = max(e - 2.0 * float(p @ r) + float(p @ G @ p), 0.0)
+        self.explained = 1.0 - res_energy / e if e > 0 else 0.0
         self._gains = p if self.explained >= self.min_explained else np.zeros_like(p)
 
     def _process_block(self, y: np.ndarray, out_est, out_train, out_drive, sl) -> None:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .kernels import interp_extended
+
 
 class MonotonePiecewiseLinear:
     """Strictly increasing piecewise-linear function through ``(x[i], y[i])``.
@@ -33,16 +35,8 @@ class MonotonePiecewiseLinear:
             raise ValueError("breakpoints must be strictly increasing in x and in y")
         self.x = x
         self.y = y
-        self._slope_lo = (y[1] - y[0]) / (x[1] - x[0])
-        self._slope_hi = (y[-1] - y[-2]) / (x[-1] - x[-2])
-        # Tables extended linearly far beyond the breakpoints (1e6 spans each side), so one
-        # np.interp pass evaluates f and f^-1 there; only inputs beyond them (absurd for
-        # accelerations) take the slower masked path.
-        span_x = x[-1] - x[0]
-        ext = 1e6
-        self._xe = np.concatenate([[x[0] - ext * span_x], x, [x[-1] + ext * span_x]])
-        self._ye = np.concatenate([[y[0] - ext * span_x * self._slope_lo], y,
-                                   [y[-1] + ext * span_x * self._slope_hi]])
+        self._slopes = np.diff(y) / np.diff(x)
+        self._inverse_slopes = np.diff(x) / np.diff(y)
 
     @classmethod
     def identity(cls, scale: float = 1.0) -> "MonotonePiecewiseLinear":
@@ -56,35 +50,18 @@ class MonotonePiecewiseLinear:
             raise ValueError(f"gain must be > 0, got {k}")
         return cls([-1.0, 1.0], [-k, k])
 
-    @staticmethod
-    def _eval(x, y, s_lo, s_hi, v):
-        v = np.asarray(v, dtype=float)
-        out = np.interp(v, x, y)
-        lo = v < x[0]
-        hi = v > x[-1]
-        if lo.any() or hi.any():
-            out = np.where(lo, y[0] + (v - x[0]) * s_lo, out)
-            out = np.where(hi, y[-1] + (v - x[-1]) * s_hi, out)
-        return out
-
     def __call__(self, v):
         """Evaluate ``g(v)`` (vectorised, any shape)."""
-        v = np.asarray(v, dtype=float)
-        if v.size and self._xe[0] < v.min() and v.max() < self._xe[-1]:
-            return np.interp(v, self._xe, self._ye)
-        return self._eval(self.x, self.y, self._slope_lo, self._slope_hi, v)
+        return _evaluate(self.x, self.y, self._slopes, v)
 
     def inverse(self, w):
         """Evaluate ``g^-1(w)`` (vectorised, any shape)."""
-        w = np.asarray(w, dtype=float)
-        if w.size and self._ye[0] < w.min() and w.max() < self._ye[-1]:
-            return np.interp(w, self._ye, self._xe)
-        return self._eval(self.y, self.x, 1.0 / self._slope_lo, 1.0 / self._slope_hi, w)
+        return _evaluate(self.y, self.x, self._inverse_slopes, w)
 
     def slope_at(self, v: float) -> float:
         """Local slope dg/dv at ``v`` (right derivative)."""
         i = int(np.clip(np.searchsorted(self.x, v, side="right") - 1, 0, self.x.size - 2))
-        return float((self.y[i + 1] - self.y[i]) / (self.x[i + 1] - self.x[i]))
+        return float(self._slopes[i])
 
     def is_identity(self, tol: float = 1e-12) -> bool:
         """True when the function is ``v -> v`` within ``tol``."""
@@ -99,3 +76,18 @@ class MonotonePiecewiseLinear:
 
     def __repr__(self):
         return f"MonotonePiecewiseLinear({self.x.size} breakpoints)"
+
+
+def evaluate_piecewise_linear(x, y, v) -> np.ndarray:
+    """Piecewise-linear function through ``(x, y)`` (``x`` strictly increasing), extended
+    beyond the outer breakpoints with the end slopes, at ``v`` (any shape)."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    return _evaluate(x, y, np.diff(y) / np.diff(x), v)
+
+
+def _evaluate(x, y, slopes, v) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    out = np.empty(v.shape)
+    interp_extended(x, y, slopes, np.ascontiguousarray(v).reshape(-1), out.reshape(-1))
+    return out
