@@ -60,9 +60,9 @@ def test_live_run_replay_and_offline_agree(ros_graph, tmp_path):
     replay_into_pipeline(ros_graph, bag, "--rate", "1")
     wait_quiet(ros_graph, replayed, "the replayed diagnosis to settle")
     again = live_states(replayed)
-    assert [s for s, _ in again] == [s for s, _ in recorded], (again, recorded)
+    assert [s for s, _ in again] == [s for s, _ in recorded], (again, recorded, truth, ros_graph.output())
     for (_, t_live), (_, t_replay) in zip(recorded, again):
-        assert abs(t_live - t_replay) <= ONSET_TOL_REPLAY, (recorded, again)
+        assert abs(t_live - t_replay) <= ONSET_TOL_REPLAY, (recorded, again, truth, ros_graph.output())
 
     # 3. offline: bearing-diagnose BAG_DIR
     exe = executable("bearing_diagnoser", "bearing-diagnose")  # FileNotFoundError when not built

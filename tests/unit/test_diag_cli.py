@@ -17,7 +17,10 @@ KEYS = {"start", "end", "state", "confidence", "detected_at", "scores", "model_s
 
 
 def write_npz(path, accel, fs=FS, rpm=1800.0, **extra):
-    np.savez(path, t=np.arange(np.size(accel)) / fs, accel=accel, unbalance=np.zeros(np.size(accel)),
+    """A bearing-sim-style npz; a bad ``fs`` (e.g. 0) is written as given, ``t`` then
+    counts samples."""
+    t = np.arange(np.size(accel)) / (fs if fs > 0 else 1.0)
+    np.savez(path, t=t, accel=accel, unbalance=np.zeros(np.size(accel)),
              truth=np.zeros(np.size(accel), int), sample_rate=fs, rpm=rpm, **extra)
     return path
 

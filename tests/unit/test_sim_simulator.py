@@ -111,13 +111,15 @@ def test_long_span_stable_no_drift():
     assert st["rejected"] < 0.1 * st["steps"]
 
 
-def test_tolerance_convergence():
-    """Waveform at the default tolerance vs a 1e-8 reference: < 1 % RMS error."""
-    sched = [(F.OUTER_RACE, 0.025)]
+@pytest.mark.parametrize("fault", [F.OUTER_RACE, F.INNER_RACE])
+def test_tolerance_convergence(fault):
+    """Waveform at the default tolerance vs a 1e-8 reference: < 0.1 % RMS error
+    (measured 1.4e-4 OR, 0.9e-4 IR; the integrator docstring's figure)."""
+    sched = [(fault, 0.025)]
     ref = simulate(SimulationConfig(rtol=1e-8), sched)["accel"]
     x = simulate(SimulationConfig(), sched)["accel"]
     err = np.sqrt(np.mean((x - ref) ** 2)) / np.sqrt(np.mean(ref**2))
-    assert err < 1e-2
+    assert err < 1e-3
 
 
 @pytest.mark.parametrize("fs", [12000.0, 1.0e6])

@@ -75,7 +75,7 @@ def rhs_cost_us(n=200000):
     return best / n * 1e6
 
 
-def bench_simulator(seconds=0.2, repeats=3, rates=(48000.0, 1.0e6)):
+def bench_simulator(seconds=0.2, repeats=5, rates=(48000.0, 1.0e6)):
     """All rows as a list of (figure, value, unit)."""
     rows = [("first-call (compile or cache load) time", first_call_time(), "s")]
     rows.append(("rhs evaluation cost (best of 3)", rhs_cost_us(), "us"))
