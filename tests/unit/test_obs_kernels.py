@@ -50,3 +50,24 @@ def test_run_modes_equals_per_mode_lfilter_and_carries_state():
     run_modes(lam, bw, bz, c, weight, 0.25, w[:120], z[:120], state, out[:120])
     run_modes(lam, bw, bz, c, weight, 0.25, w[120:], z[120:], state, out[120:])
     np.testing.assert_allclose(out, expect, rtol=0, atol=1e-12)
+
+
+def test_warm_up_compiles_every_signature_the_observers_use():
+    """The node calls warm_up() before subscribing: afterwards, observing a stream must
+    compile nothing more (a compile stalls the node for about a second, longer than its
+    input queue holds)."""
+    from bearing_observer import kernels
+    from bearing_observer.hw_model import load_model_set
+    from bearing_observer.observer import FaultObserver
+
+    kernels.warm_up()
+    names = ("add_pulses", "interp_extended", "fold_energy", "run_modes")
+    before = {n: len(getattr(kernels, n).signatures) for n in names}
+    rng = np.random.default_rng(3)
+    for model in load_model_set("sim_48k", 48000.0).values():
+        for poles in ("model", "contracted"):
+            obs = FaultObserver(model, poles=poles)
+            y = rng.standard_normal(9600)
+            for i in range(0, y.size, 480):
+                obs.process(y[i:i + 480])
+    assert {n: len(getattr(kernels, n).signatures) for n in names} == before

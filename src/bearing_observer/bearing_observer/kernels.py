@@ -136,3 +136,17 @@ def run_modes(lam: np.ndarray, bw: np.ndarray, bz: np.ndarray, c: np.ndarray,
             acc += weight[m] * (c[m] * s).real
             state[m] = lam[m] * s + bw[m] * w[i] + bz[m] * z[i]
         out[i] = acc
+
+
+def warm_up() -> None:
+    """Compile (first run after an install) or load from numba's cache every kernel, with
+    the argument types the observer uses. A node calls this before it subscribes, so that
+    no chunk waits for a compile (about a second per kernel) and its queue never
+    overflows."""
+    z = np.zeros(8)
+    out = np.zeros(8)
+    add_pulses(np.zeros((2, 8)), np.array([1.5]), np.array([2.5]), np.ones((2, 1)), 2)
+    interp_extended(np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), np.array([1.0]), z, out)
+    fold_energy(z, 0, 0.0, 100.0, 48000.0, 4)
+    modes = np.zeros(1, dtype=complex)
+    run_modes(modes, modes, modes, modes, np.ones(1), 0.0, z, z, np.zeros(1, dtype=complex), out)

@@ -24,7 +24,7 @@ from bearing_sim.ros_parameters import declare
 
 from .chunk_stream import ChunkStream
 from .hw_model import ModelFileError, default_model_set
-from .impulse_trains import impulse_train
+from .kernels import warm_up
 from .observer import FaultObserver
 from .observer_node_config import PARAMETERS, TOPIC_INPUT, TOPIC_SPEED, default_node_name, residual_topic
 
@@ -43,7 +43,7 @@ class ObserverNode(Node):
         self.observer = None
         self.model_set = None
         self.stream = ChunkStream(TOPIC_INPUT)
-        impulse_train(64, 48000.0, 100.0)  # load/compile the train renderer now, not on the first chunk
+        warm_up()  # compile or load the kernels now, not on the first chunks
         self.pub = self.create_publisher(Residual, residual_topic(self.values["fault_type"]), STREAM_QOS)
         self.create_subscription(VibrationChunk, TOPIC_INPUT, self.on_chunk, STREAM_QOS)
         self.create_subscription(ShaftSpeed, TOPIC_SPEED, self.on_speed, QoSProfile(depth=10))
