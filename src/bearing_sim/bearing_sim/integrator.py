@@ -89,10 +89,8 @@ def integrate_interval(t, t_end, y, h, h_max, p, ct0, st0, or_rel, ir_rel, rtol,
     # k_5 = f(t + h, y_new) becomes the next step's k_1 (FSAL)
     k = np.empty(5 * n)
     ynew = np.empty(n)
-    ystage = np.empty(n)
     work = np.empty(WORK_LEN)
     base = np.empty(6)
-    trig_mid = np.empty(6)
     trig = np.empty(6)
     om = np.empty(3)
     om[0] = p[P_OMI]
@@ -116,24 +114,27 @@ def integrate_interval(t, t_end, y, h, h_max, p, ct0, st0, or_rel, ir_rel, rtol,
             last = True
         if h < 1e-14:
             return h_keep, n_written, False
-        # classic RK4 stages at t + h/2, t + h/2, t + h (one inlined right-hand side
-        # each), then f at the new state
+        # classic RK4 stages at t + h/2, t + h/2, t + h, then f at the new state (one
+        # inlined right-hand side in the loop); the stage states go to ynew, the last
+        # one is the new solution whose derivative k5 is the next step's k1 (FSAL)
         hh = 0.5 * h
-        for i in range(n):
-            ystage[i] = y[i] + hh * k[i]
-        _rotate(base, om, hh, trig_mid)
-        rhs_into(ystage, p, ct0, st0, or_rel, ir_rel, k, n, work, trig_mid)
-        for i in range(n):
-            ystage[i] = y[i] + hh * k[n + i]
-        rhs_into(ystage, p, ct0, st0, or_rel, ir_rel, k, 2 * n, work, trig_mid)
-        for i in range(n):
-            ystage[i] = y[i] + h * k[2 * n + i]
-        _rotate(base, om, h, trig)
-        rhs_into(ystage, p, ct0, st0, or_rel, ir_rel, k, 3 * n, work, trig)
-        h6 = h / 6.0
-        for i in range(n):
-            ynew[i] = y[i] + h6 * (k[i] + 2.0 * (k[n + i] + k[2 * n + i]) + k[3 * n + i])
-        rhs_into(ynew, p, ct0, st0, or_rel, ir_rel, k, 4 * n, work, trig)
+        for st in range(1, 5):
+            if st == 1:
+                for i in range(n):
+                    ynew[i] = y[i] + hh * k[i]
+                _rotate(base, om, hh, trig)
+            elif st == 2:
+                for i in range(n):
+                    ynew[i] = y[i] + hh * k[n + i]
+            elif st == 3:
+                for i in range(n):
+                    ynew[i] = y[i] + h * k[2 * n + i]
+                _rotate(base, om, h, trig)
+            else:
+                h6 = h / 6.0
+                for i in range(n):
+                    ynew[i] = y[i] + h6 * (k[i] + 2.0 * (k[n + i] + k[2 * n + i]) + k[3 * n + i])
+            rhs_into(ynew, p, ct0, st0, or_rel, ir_rel, k, st * n, work, trig)
         stats[STAT_RHS] += 4
         t_new = t_end if last else t + h
         err = 0.0
