@@ -110,8 +110,21 @@ def synthetic_chunks(n_chunks=5, n=4, rate=1000.0, t0=2.0, skip=(), dup=()):
 # independent decoding
 
 
+def read_ros2_messages(path):
+    """Every message of an MCAP file decoded by mcap_ros2, as objects with ``channel``,
+    ``schema``, ``ros_msg`` and ``log_time_ns`` (mcap's reader, mcap_ros2's decoder)."""
+    from types import SimpleNamespace
+
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        return [SimpleNamespace(schema=schema, channel=channel, ros_msg=ros_msg, log_time_ns=message.log_time)
+                for schema, channel, message, ros_msg in reader.iter_decoded_messages()]
+
+
 def test_written_bag_decodes_with_mcap_ros2_field_for_field(tmp_path):
-    from mcap_ros2.reader import read_ros2_messages
     bag = tmp_path / "bag"
     sent = write_rclpy_bag(bag)
     files = list(bag.glob("*.mcap"))
@@ -220,7 +233,6 @@ def record_105(cwru_record):
 
 
 def test_from_mat_chunks_units_and_speed(tmp_path, record_105):
-    from mcap_ros2.reader import read_ros2_messages
     from scipy.io import loadmat
     raw_g = np.asarray(loadmat(record_105)["X105_DE_time"], dtype=float).ravel()
     out = tmp_path / "cwru"
