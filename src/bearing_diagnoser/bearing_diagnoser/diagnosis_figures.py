@@ -37,6 +37,13 @@ def _state_track(decisions, attr: str):
     return np.asarray(t), np.asarray(v)
 
 
+def _save(plt, fig, path: Path, paths: list[Path]) -> None:
+    """Write ``fig`` to ``path`` (PNG, 110 dpi), close it and record the path."""
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    paths.append(path)
+
+
 def write_figures(result, directory) -> list[Path]:
     """Write the figures of an :class:`~.offline.OfflineResult` into ``directory``; return their paths."""
     plt = _plt()
@@ -61,9 +68,7 @@ def write_figures(result, directory) -> list[Path]:
     ax2.set_yticks(range(len(labels)), labels)
     ax2.set_xlabel("time (s)")
     ax2.legend(loc="upper right", fontsize=8)
-    paths.append(out / "acceleration_states.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
+    _save(plt, fig, out / "acceleration_states.png", paths)
 
     for h, st in result.streams.items():
         r, u = st["residual"], st["impulse_train"]
@@ -74,9 +79,7 @@ def write_figures(result, directory) -> list[Path]:
         ax.set_xlabel("time (s)")
         ax.set_title(f"{h} observer residual and its impulse train at {st['fault_frequency']:.2f} Hz")
         ax.legend(loc="upper right", fontsize=8)
-        paths.append(out / f"residual_{h}.png")
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        _save(plt, fig, out / f"residual_{h}.png", paths)
 
         n = min(r.size, int(XCORR_MAX_S * fs))
         xc = train_cross_correlation(r[:n], u[:n])
@@ -90,9 +93,7 @@ def write_figures(result, directory) -> list[Path]:
         ax.set_xlabel("lag (s)")
         ax.set_title(f"{h}: cross-correlation of |residual| with the impulse train (thesis 3.2)")
         ax.legend(loc="upper right", fontsize=8)
-        paths.append(out / f"xcorr_{h}.png")
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        _save(plt, fig, out / f"xcorr_{h}.png", paths)
 
     dec = result.decisions
     if dec:
@@ -112,7 +113,5 @@ def write_figures(result, directory) -> list[Path]:
         a3.set_yticks(range(len(labels)), labels)
         a3.set_xlabel("decision time (s)")
         a3.legend(fontsize=8)
-        paths.append(out / "timeline.png")
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        _save(plt, fig, out / "timeline.png", paths)
     return paths

@@ -146,11 +146,14 @@ class HWModel:
 
     # --- simulation ------------------------------------------------------------------
     def simulate_linear(self, w: np.ndarray) -> np.ndarray:
-        """``x = q^-nk B/F w`` from zero initial state."""
+        """``x = q^-nk B/F w`` from zero initial state, along the last axis (a 2-D ``w``
+        is filtered row by row in one call)."""
         w = np.asarray(w, dtype=float)
-        x = signal.lfilter(self.b, self.f, w)
+        x = signal.lfilter(self.b, self.f, w, axis=-1)
         if self.nk:
-            x = np.concatenate([np.zeros(min(self.nk, x.size)), x[: max(0, x.size - self.nk)]])
+            n = x.shape[-1]
+            k = min(self.nk, n)
+            x = np.concatenate([np.zeros(x.shape[:-1] + (k,)), x[..., :n - k]], axis=-1)
         return x
 
     def simulate(self, u: np.ndarray) -> np.ndarray:

@@ -100,15 +100,6 @@ class ObserverOutput:
     drive: np.ndarray
 
 
-def _delayed(x: np.ndarray, buf: np.ndarray):
-    """``x`` delayed by ``buf.size`` samples with carried history; returns (out, new_buf)."""
-    k = buf.size
-    if k == 0:
-        return x, buf
-    xx = np.concatenate([buf, x])
-    return xx[: x.size], xx[x.size:].copy() if x.size >= k else xx[x.size:].copy()
-
-
 class ModalFilter:
     """The observer's error dynamics as decoupled first-order modes (exact state).
 
@@ -444,20 +435,6 @@ class FaultObserver:
         i = self._n - c[0]
         return c[2][i:i + n], c[3][:, i:i + n]
 
-    def _linear(self, w: np.ndarray) -> np.ndarray:
-        """Zero-state response of the model's linear block including the delay."""
-        x = signal.lfilter(self.model.b, self.model.f, w)
-        nk = self.model.nk
-        return np.concatenate([np.zeros(nk), x[:-nk]]) if nk else x
-
-    def _regressors(self, comps: np.ndarray) -> np.ndarray:
-        """Zero-state model responses (``q^-nk B/F``) to the rows of ``comps`` (one call)."""
-        x = signal.lfilter(self.model.b, self.model.f, comps, axis=1)
-        nk = self.model.nk
-        if nk:
-            x = np.concatenate([np.zeros((x.shape[0], nk)), x[:, :-nk]], axis=1)
-        return x
-
     def _template_spectrum(self, n_bins: int):
         """FFT length and conjugate spectrum of the zero-padded template fold (cached)."""
         key = (n_bins, self._freq)
@@ -474,7 +451,7 @@ class FaultObserver:
         n = int(math.ceil(period))
         imp = np.zeros(n)
         imp[0] = 1.0
-        h2 = self._linear(imp) ** 2
+        h2 = self.model.simulate_linear(imp) ** 2
         pos = np.arange(n) / period
         idx = np.minimum((pos * n_bins).astype(np.int64), n_bins - 1)
         return np.bincount(idx, weights=h2, minlength=n_bins)
@@ -505,7 +482,7 @@ class FaultObserver:
         # regressors over the window (zero state at the window start; first part discarded);
         # the trains are rendered through the next update interval in the same call
         self._cache_trains(self._n - z.size, self._n + self.update_n)
-        R = self._regressors(self._cached_trains[3][:, :z.size])
+        R = self.model.simulate_linear(self._cached_trains[3][:, :z.size])  # one row per regressor
         skip = min(z.size // 4, int(round(period)))
         Rw, zw = R[:, skip:], z[skip:]      # one regressor per row (contiguous rows)
         # normal equations (p <= 3 regressors), ridge-regularised at 1e-9 of the trace

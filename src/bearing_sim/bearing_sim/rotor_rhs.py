@@ -333,6 +333,26 @@ def rhs_trig(y, p, ct0, st0, or_rel, ir_rel, dy, work, trig):
 
 
 @njit(cache=True, error_model="numpy", fastmath=FASTMATH, inline="always")
+def _arrow_into(dy, o, ix, b0, nb, m, ms, kappa, Gx, Gy, scb, ssb, scc, scs, sss, cs, sn):
+    """Accelerations of one bearing's arrow block into dy[o + 29 + ...] by the 2x2 Schur
+    complement (as :func:`_solve_arrow`), from the sums of :func:`_bearing_fused`; the
+    ball rows enter holding -G and leave holding accelerations."""
+    s11 = ms - kappa * m * scc
+    s12 = -kappa * m * scs
+    s22 = ms - kappa * m * sss
+    r1 = -Gx - scb
+    r2 = -Gy - ssb
+    det = s11 * s22 - s12 * s12
+    ax = (s22 * r1 - s12 * r2) / det
+    ay = (s11 * r2 - s12 * r1) / det
+    dy[o + 29 + ix] = ax
+    dy[o + 30 + ix] = ay
+    im = 1.0 / m
+    for i in range(nb):
+        dy[o + 29 + b0 + i] = dy[o + 29 + b0 + i] * im - kappa * (cs[i] * ax + sn[i] * ay)
+
+
+@njit(cache=True, error_model="numpy", fastmath=FASTMATH, inline="always")
 def rhs_into(y, p, ct0, st0, or_rel, ir_rel, dy, o, work, trig):
     """dy[o:o + 58] = f(t, y) for y = [q, q'] (58 states): the fast, fused path.
 
@@ -373,27 +393,11 @@ def rhs_into(y, p, ct0, st0, or_rel, ir_rel, dy, o, work, trig):
     G28 = -ipw * y[v + 27] + ks * L * y[0] - ks * L * y[21] + 2 * ks * L * L * q28
     for i in range(29):
         dy[o + i] = y[29 + i]
-    # arrow blocks
-    m = p[P_MI]; ms = p[P_MS_DE]
-    s11 = ms - m * scc1; s12 = -m * scs1; s22 = ms - m * sss1
-    r1 = -Gx1 - scb1; r2 = -Gy1 - ssb1
-    det = s11 * s22 - s12 * s12
-    ax = (s22 * r1 - s12 * r2) / det
-    ay = (s11 * r2 - s12 * r1) / det
-    dy[o + 29] = ax; dy[o + 30] = ay
-    im = 1.0 / m
-    for i in range(9):
-        dy[o + 33 + i] = dy[o + 33 + i] * im - (cs1[i] * ax + sn1[i] * ay)
-    m = p[P_MO]; ms = p[P_MS_FE]; kap = p[P_KAPPA_FE]
-    s11 = ms - kap * m * scc2; s12 = -kap * m * scs2; s22 = ms - kap * m * sss2
-    r1 = -Gx2 - scb2; r2 = -Gy2 - ssb2
-    det = s11 * s22 - s12 * s12
-    ax = (s22 * r1 - s12 * r2) / det
-    ay = (s11 * r2 - s12 * r1) / det
-    dy[o + 50] = ax; dy[o + 51] = ay
-    im = 1.0 / m
-    for i in range(8):
-        dy[o + 42 + i] = dy[o + 42 + i] * im - kap * (cs2[i] * ax + sn2[i] * ay)
+    # arrow blocks (kappa = 1 at the drive end; listing quirk 1 at the fan end)
+    _arrow_into(dy, o, 0, BALL0_DE, NB_DE, p[P_MI], p[P_MS_DE], 1.0,
+                Gx1, Gy1, scb1, ssb1, scc1, scs1, sss1, cs1, sn1)
+    _arrow_into(dy, o, 21, BALL0_FE, NB_FE, p[P_MO], p[P_MS_FE], p[P_KAPPA_FE],
+                Gx2, Gy2, scb2, ssb2, scc2, scs2, sss2, cs2, sn2)
     A = p[P_MH_A]; B = p[P_MH_B]
     idet = 1.0 / (A * A - B * B)
     dy[o + 31] = (-A * Ghx1 + B * Ghx2) * idet
