@@ -16,6 +16,7 @@ named with its command and the tail of its log, and the exit code is non-zero.
 import hashlib
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 import time
@@ -28,15 +29,9 @@ STAMPS = VENV / ".bootstrap-stamps"
 LOGS = ROOT / "out" / "setup-logs"
 PY_TAG = f"python{sys.version_info.major}.{sys.version_info.minor}"
 SOURCE_DIRS = [ROOT / "src", ROOT / "msgs"]
-# Command-line tools linked into .venv/bin: (package, console script).
-TOOLS = [
-    ("bearing_sim", "bearing-sim"),
-    ("bearing_observer", "bearing-identify"),
-    ("bearing_diagnoser", "bearing-diagnose"),
-    ("bearing_diagnoser", "bearing-cwru-report"),
-    ("bearing_bringup", "bearing-bag"),
-    ("bearing_bringup", "bearing-graph"),
-]
+#: Console scripts named ``bearing-*`` (the packages' setup.py entry points) are the
+#: command-line tools linked into .venv/bin; node executables (simulator, ...) are not.
+TOOL_PREFIX = "bearing-"
 
 
 class StepFailed(RuntimeError):
@@ -137,6 +132,7 @@ def colcon_build() -> None:
         say("4/5 colcon build: sources unchanged")
         return
     say("4/5 colcon build in ros_ws/")
+    clear_python_packages()
     env = dict(os.environ)
     env.update(AMENT_PREFIX_PATH=str(VENV), CMAKE_PREFIX_PATH=str(VENV), VIRTUAL_ENV=str(VENV),
                PATH=f"{VENV / 'bin'}{os.pathsep}{env.get('PATH', '')}")
@@ -144,6 +140,18 @@ def colcon_build() -> None:
         env=env, cwd=WS)
     drop_numba_caches()
     mark("colcon", key)
+
+
+def clear_python_packages() -> None:
+    """Remove the build and install trees of the ament_python packages before a rebuild.
+
+    colcon copies Python files into the install space and never deletes one whose source
+    was removed or moved, so a stale module could still be imported. They rebuild in
+    about a second each; bearing_msgs (CMake, slow) is kept.
+    """
+    for setup_py in (ROOT / "src").glob("*/setup.py"):
+        for tree in ("build", "install"):
+            shutil.rmtree(WS / tree / setup_py.parent.name, ignore_errors=True)
 
 
 def drop_numba_caches() -> None:
@@ -177,18 +185,13 @@ def link_workspace() -> None:
         f"os.environ.setdefault('AMENT_PREFIX_PATH', {prefixes!r})"
     )
     (site / "bearing_ros_ws.pth").write_text("\n".join(lines + [env_line]) + "\n")
-    missing = []
-    for package, tool in TOOLS:
-        target = install / package / "lib" / package / tool
-        link = VENV / "bin" / tool
-        if not target.exists():
-            missing.append(tool)
-            continue
+    tools = sorted(install.glob(f"*/lib/*/{TOOL_PREFIX}*"))
+    for target in tools:
+        link = VENV / "bin" / target.name
         if link.is_symlink() or link.exists():
             link.unlink()
         link.symlink_to(target)
-    if missing:
-        say(f"  not built (yet): {', '.join(missing)}")
+    say(f"  tools: {', '.join(t.name for t in tools)}")
 
 
 def main() -> int:

@@ -23,7 +23,6 @@ setup(
     entry_points={
         "console_scripts": [
             "bearing-graph = bearing_bringup.graph_cli:main",
-            "bearing-bag = bearing_bringup.bag_cli:main",
         ],
     },
 )

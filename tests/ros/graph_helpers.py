@@ -7,11 +7,9 @@ import signal
 import sys
 import time
 
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from bearing_common import topics
 
-BAG_CLI = [sys.executable, "-m", "bearing_bringup.bag_cli"]
-LATCHED_ALL = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+BAG_CLI = [sys.executable, "-m", "bearing_recordings.bag_cli"]
 QUIET_S = 2.0  # s without a new fault_state: the diagnoser has caught up
 STATE_CODES = {"normal": 0, "outer_race": 1, "inner_race": 2, "ball": 3, "unknown": 4}
 
@@ -19,6 +17,11 @@ STATE_CODES = {"normal": 0, "outer_race": 1, "inner_race": 2, "ball": 3, "unknow
 def params_file():
     from bearing_bringup.graph import config_path
     return config_path()
+
+
+def wait_spec(counts: dict) -> str:
+    """The simulator's ``wait_for_subscribers`` value: {Topic: subscriber count} -> 'name:n,...'."""
+    return ",".join(f"{topic.name}:{n}" for topic, n in counts.items())
 
 
 def transitions(states) -> list:
@@ -65,11 +68,11 @@ def replay_into_pipeline(ros_graph, bag, *play_options):
     """Start fresh observers + diagnoser, wait until the diagnoser listens, play ``bag``'s
     vibration and shaft speed into them (both observers matched first); return the player."""
     start_pipeline(ros_graph)
-    ros_graph.wait_until(lambda: all(ros_graph.node.count_subscribers(t) >= 1
-                                     for t in ("residual/outer_race", "residual/inner_race")),
+    ros_graph.wait_until(lambda: all(ros_graph.node.count_subscribers(t.name) >= 1
+                                     for t in topics.RESIDUALS.values()),
                          60.0, "the diagnoser to be ready")
     player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
-        "play", str(bag), "--topics", "vibration/drive_end", "shaft_speed", "--wait-for-subscribers", "2",
+        "play", str(bag), "--topics", topics.VIBRATION.name, topics.SHAFT_SPEED.name, "--wait-for-subscribers", "2",
         *play_options])
     ros_graph.wait_until(lambda: player.returncode is not None, 120.0, "the replay to finish")
     assert player.returncode == 0, ros_graph.output()

@@ -5,6 +5,7 @@ import sys
 import rclpy
 from rclpy.executors import ExternalShutdownException
 
+from bearing_common import topics
 from bearing_msgs.msg import VibrationChunk
 
 SAMPLES = [0.0, -1.5, 2.25, 1e-9, 3.0e4]
@@ -25,7 +26,7 @@ def known_chunk() -> VibrationChunk:
 def main() -> int:
     rclpy.init()
     node = rclpy.create_node("publish_probe")
-    pub = node.create_publisher(VibrationChunk, "vibration/drive_end", 50)
+    pub = node.create_publisher(VibrationChunk, topics.VIBRATION.name, topics.qos(topics.VIBRATION))
     node.create_timer(0.05, lambda: pub.publish(known_chunk()))
     try:
         rclpy.spin(node)

@@ -16,9 +16,10 @@ from typing import Callable, Optional
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import QoSProfile
 
 from bearing_bringup.process_group import ProcessGroup
+from bearing_common import topics
+from bearing_common.topics import Topic
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
 INSTALL = REPO_ROOT / "ros_ws" / "install"
@@ -88,19 +89,22 @@ class RosGraph:
         command = argv if argv is not None else [str(executable(package, exe))] + ros_args(name, params, params_file)
         return self.processes.start(name or exe, command)
 
-    def subscribe(self, topic: str, msg_type, qos: Optional[QoSProfile] = None) -> list:
-        """Collect every message on ``topic`` into the returned list."""
+    def subscribe(self, topic: Topic, namespace: str = "", depth: int = 1000) -> list:
+        """Collect every message on ``topic`` (contract QoS, a ``depth``-deep queue) into the returned list."""
         received: list = []
 
         def on_msg(msg):
             with self._lock:
                 received.append(msg)
 
-        self.node.create_subscription(msg_type, topic, on_msg, qos or QoSProfile(depth=1000))
+        self.node.create_subscription(topics.message_class(topic.msgtype), topics.qualified(namespace, topic),
+                                      on_msg, topics.qos(topic, depth=depth))
         return received
 
-    def publisher(self, topic: str, msg_type, qos: Optional[QoSProfile] = None):
-        return self.node.create_publisher(msg_type, topic, qos or QoSProfile(depth=100))
+    def publisher(self, topic: Topic, namespace: str = "", depth: int = 100):
+        """A publisher of ``topic`` with the contract's QoS (keep last ``depth``)."""
+        return self.node.create_publisher(topics.message_class(topic.msgtype), topics.qualified(namespace, topic),
+                                          topics.qos(topic, depth=depth))
 
     def wait_until(self, condition: Callable[[], bool], timeout: float, what: str) -> None:
         """Wait for ``condition``; on timeout fail with ``what`` and the processes' output."""

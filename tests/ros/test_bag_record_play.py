@@ -10,19 +10,16 @@ import time
 
 import numpy as np
 import pytest
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-from bearing_msgs.msg import FaultState, VibrationChunk
+from bearing_common import topics
+from bearing_msgs.msg import FaultState
+from bearing_recordings.bag_read import read_bag
+from bearing_recordings.bag_write import BagWriter
+from graph_helpers import BAG_CLI
 from publish_probe import known_chunk
 from ros_harness import REPO_ROOT
 
-from bearing_bringup.bag_write import BagWriter
-from bearing_diagnoser.bag_files import read_bag
-
 pytestmark = pytest.mark.ros
-
-BAG_CLI = [sys.executable, "-m", "bearing_bringup.bag_cli"]
-LATCHED = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 def stop_member(member, sig, timeout=15.0) -> int:
@@ -40,10 +37,10 @@ def test_record_a_publisher_and_stop_by_signal(ros_graph, tmp_path, sig):
     latched.state = FaultState.INNER_RACE
     latched.onset.sec = 6
     latched.hypotheses, latched.scores = ["inner_race"], [3.5]
-    latched_pub = ros_graph.publisher("fault_state", FaultState, LATCHED)  # kept alive: it holds the sample
+    latched_pub = ros_graph.publisher(topics.FAULT_STATE, depth=10)  # kept alive: it holds the sample
     latched_pub.publish(latched)
 
-    seen = ros_graph.subscribe("vibration/drive_end", VibrationChunk)
+    seen = ros_graph.subscribe(topics.VIBRATION)
     probe = REPO_ROOT / "tests" / "ros" / "publish_probe.py"
     ros_graph.start("", "", name="publish_probe", argv=[sys.executable, str(probe)])
     ros_graph.wait_until(lambda: len(seen) >= 2, timeout=30.0, what="the probe publishing")
@@ -51,7 +48,7 @@ def test_record_a_publisher_and_stop_by_signal(ros_graph, tmp_path, sig):
     bag = tmp_path / "rec"
     t_start = time.time_ns()
     recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + ["record", "--out", str(bag)])
-    for topic in ("/vibration/drive_end", "/fault_state"):
+    for topic in (topics.qualified("", topics.VIBRATION), topics.qualified("", topics.FAULT_STATE)):
         ros_graph.wait_until(lambda: any(f"first message on {topic}" in line for line in recorder.lines),
                              timeout=30.0, what=f"the recorder to receive {topic}")
     n0 = len(seen)
@@ -75,14 +72,13 @@ def test_record_a_publisher_and_stop_by_signal(ros_graph, tmp_path, sig):
 
 
 def test_record_duration_and_namespace(ros_graph, tmp_path):
-    pub = ros_graph.publisher("/rig_a/vibration/drive_end", VibrationChunk, QoSProfile(depth=50))
+    pub = ros_graph.publisher(topics.VIBRATION, namespace="rig_a", depth=50)
     bag = tmp_path / "ns"
     recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + [
-        "record", "--namespace", "rig_a", "--topics", "vibration/drive_end", "--duration", "3",
+        "record", "--namespace", "rig_a", "--topics", topics.VIBRATION.name, "--duration", "3",
         "--storage", "sqlite3", "--out", str(bag)])
-    ros_graph.wait_until(lambda: any("recording" in line for line in recorder.lines), timeout=30.0,
-                         what="the recorder to start")
-    time.sleep(1.0)  # discovery
+    ros_graph.wait_until(lambda: pub.get_subscription_count() >= 1, timeout=30.0,
+                         what="the recorder to subscribe")
     msg = known_chunk()
     while recorder.returncode is None:
         pub.publish(msg)
@@ -101,8 +97,7 @@ def write_play_bag(path, n=21, dt=0.05):
     with BagWriter(path) as bag:
         store = bag.typestore
         T = store.types
-        bag.add_topic("/vibration/drive_end", "bearing_msgs/msg/VibrationChunk", False, 50)
-        bag.add_topic("/fault_state", "bearing_msgs/msg/FaultState", True, 10)
+        vib, state_topic = bag.add_graph_topic(topics.VIBRATION).topic, bag.add_graph_topic(topics.FAULT_STATE).topic
         t0 = 1_000_000_000_000
         for k in range(n):
             t = t0 + round(k * dt * 1e9)
@@ -112,17 +107,18 @@ def write_play_bag(path, n=21, dt=0.05):
                                                 frame_id="drive_end"),
                 sample_rate=1000.0, first_sample_index=50 * k, source="simulator",
                 samples=np.full(50, float(k)))
-            bag.write("/vibration/drive_end", t, bag.serialize(msg, "bearing_msgs/msg/VibrationChunk"))
+            bag.write(vib, t, bag.serialize(msg, topics.VIBRATION.msgtype))
         state = T["bearing_msgs/msg/FaultState"](
             header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=1, nanosec=0), frame_id=""),
             state=1, confidence=0.9, onset=T["builtin_interfaces/msg/Time"](sec=0, nanosec=500), hypotheses=[],
             scores=np.zeros(0), model_set="sim_48k", detail="")
-        bag.write("/fault_state", t0 + round((n - 1) * dt * 1e9), bag.serialize(state, "bearing_msgs/msg/FaultState"))
+        bag.write(state_topic, t0 + round((n - 1) * dt * 1e9), bag.serialize(state, topics.FAULT_STATE.msgtype))
     return t0, n, dt
 
 
 def test_play_publishes_in_order_at_rate_with_clock(ros_graph, tmp_path):
     from rosgraph_msgs.msg import Clock
+
     t0, n, dt = write_play_bag(tmp_path / "play")
     chunks, clocks, lock = [], [], threading.Lock()
 
@@ -135,9 +131,10 @@ def test_play_publishes_in_order_at_rate_with_clock(ros_graph, tmp_path):
         with lock:
             clocks.append((time.monotonic(), msg.clock.sec * 10**9 + msg.clock.nanosec))
 
-    ros_graph.node.create_subscription(VibrationChunk, "vibration/drive_end", on_chunk, QoSProfile(depth=1000))
-    ros_graph.node.create_subscription(Clock, "/clock", on_clock, QoSProfile(depth=1000))
-    states = ros_graph.subscribe("fault_state", FaultState, LATCHED)
+    ros_graph.node.create_subscription(topics.message_class(topics.VIBRATION.msgtype), topics.VIBRATION.name,
+                                       on_chunk, topics.qos(topics.VIBRATION, depth=1000))
+    ros_graph.node.create_subscription(Clock, topics.CLOCK.name, on_clock, topics.qos(topics.CLOCK, depth=1000))
+    states = ros_graph.subscribe(topics.FAULT_STATE)
     rate = 2.0
     player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
         "play", str(tmp_path / "play"), "--rate", str(rate), "--clock", "--wait-for-subscribers"])

@@ -17,9 +17,10 @@ import subprocess
 
 import pytest
 
-from bearing_msgs.msg import FaultState
-from graph_helpers import (BAG_CLI, LATCHED_ALL, STATE_CODES, live_states, params_file, replay_into_pipeline,
-                           start_pipeline, stop, transitions, wait_quiet)
+from bearing_common import topics
+from bearing_common.states import FaultState
+from graph_helpers import (BAG_CLI, STATE_CODES, live_states, params_file, replay_into_pipeline, start_pipeline, stop,
+                           transitions, wait_quiet, wait_spec)
 from ros_harness import executable
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -35,9 +36,10 @@ def test_live_run_replay_and_offline_agree(ros_graph, tmp_path):
     recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + ["record", "--out", str(bag)])
     ros_graph.wait_until(lambda: any("recording" in line for line in recorder.lines), 30.0, "the recorder to start")
     start_pipeline(ros_graph)
-    live = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
+    live = ros_graph.subscribe(topics.FAULT_STATE)
     sim = ros_graph.start("bearing_sim", "simulator", name="simulator", params_file=params_file(),
-                          params={"scenario": "or-ir", "segment_duration": SEGMENT, "wait_for_subscribers": "vibration/drive_end:3,residual/outer_race:2,residual/inner_race:2",
+                          params={"scenario": "or-ir", "segment_duration": SEGMENT, "wait_for_subscribers": wait_spec(
+                              {topics.VIBRATION: 3, topics.RESIDUAL_OUTER_RACE: 2, topics.RESIDUAL_INNER_RACE: 2}),
                                   "linger": 2.0})
     ros_graph.wait_until(lambda: sim.returncode is not None, 120.0, "the simulator to finish the scenario")
     assert sim.returncode == 0, ros_graph.output()
@@ -46,7 +48,7 @@ def test_live_run_replay_and_offline_agree(ros_graph, tmp_path):
     for member in ros_graph.processes.members:
         stop(member)
 
-    from bearing_diagnoser.bag_files import read_bag
+    from bearing_recordings.bag_read import read_bag
     contents = read_bag(bag)
     assert contents.chunks and contents.truth, "bag lacks vibration or sim/truth"
     recorded = transitions([(s.state, s.onset) for s in contents.fault_states])
@@ -56,7 +58,7 @@ def test_live_run_replay_and_offline_agree(ros_graph, tmp_path):
     assert [s for s, _ in truth][-2:] == [FaultState.OUTER_RACE, FaultState.INNER_RACE], truth
 
     # 2. replay into fresh observers + diagnoser
-    replayed = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
+    replayed = ros_graph.subscribe(topics.FAULT_STATE)
     replay_into_pipeline(ros_graph, bag, "--rate", "1")
     wait_quiet(ros_graph, replayed, "the replayed diagnosis to settle")
     again = live_states(replayed)

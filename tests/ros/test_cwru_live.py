@@ -12,8 +12,9 @@ import subprocess
 
 import pytest
 
-from bearing_msgs.msg import FaultState
-from graph_helpers import BAG_CLI, LATCHED_ALL, STATE_CODES, live_states, replay_into_pipeline, transitions, wait_quiet
+from bearing_common import topics
+from bearing_common.states import FaultState
+from graph_helpers import BAG_CLI, STATE_CODES, live_states, replay_into_pipeline, transitions, wait_quiet
 from ros_harness import executable
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -37,7 +38,7 @@ def test_recording_through_the_live_graph_matches_offline(ros_graph, tmp_path, c
                              capture_output=True, text=True, timeout=120, env=ros_graph.env)
     assert convert.returncode == 0, convert.stderr
 
-    states = ros_graph.subscribe("fault_state", FaultState, LATCHED_ALL)
+    states = ros_graph.subscribe(topics.FAULT_STATE)
     replay_into_pipeline(ros_graph, bag)
     wait_quiet(ros_graph, states, "the live diagnosis to settle")
     live = live_states(states)

@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from bearing_msgs.msg import VibrationChunk
+from bearing_common import topics
 from publish_probe import known_chunk
 from ros_harness import REPO_ROOT
 
@@ -13,7 +13,7 @@ pytestmark = pytest.mark.ros
 
 
 def test_vibration_chunk_crosses_processes_intact(ros_graph):
-    received = ros_graph.subscribe("vibration/drive_end", VibrationChunk)
+    received = ros_graph.subscribe(topics.VIBRATION)
     probe = REPO_ROOT / "tests" / "ros" / "publish_probe.py"
     ros_graph.start("", "", name="publish_probe", argv=[sys.executable, str(probe)])
     ros_graph.wait_until(lambda: len(received) >= 3, timeout=30.0, what="3 VibrationChunk messages")
@@ -28,7 +28,7 @@ def test_vibration_chunk_crosses_processes_intact(ros_graph):
 
 
 def test_stop_leaves_no_process_behind(ros_graph):
-    received = ros_graph.subscribe("vibration/drive_end", VibrationChunk)
+    received = ros_graph.subscribe(topics.VIBRATION)
     probe = REPO_ROOT / "tests" / "ros" / "publish_probe.py"
     member = ros_graph.start("", "", name="publish_probe", argv=[sys.executable, str(probe)])
     ros_graph.wait_until(lambda: len(received) >= 1, timeout=30.0, what="the probe publishing")

@@ -3,20 +3,18 @@
 import time
 
 import pytest
-from diagnostic_msgs.msg import DiagnosticArray
-
+from bearing_common import topics
+from bearing_common.bearings import CATALOG
 from bearing_diagnoser.synthetic import burst_train, white_noise
 from bearing_msgs.msg import FaultState, Residual
-from bearing_sim.bearing_geometry import DRIVE_END_6205
-from graph_qos import LATCHED
 
 pytestmark = pytest.mark.ros
 
 FS = 48000.0
 N = 480
 PACE_S = 0.002  # between chunks: 5x faster than real time, like a fast replay (queues hold 50 chunks)
-BPFO = DRIVE_END_6205.bpfo(30.0)
-BPFI = DRIVE_END_6205.bpfi(30.0)
+BPFO = CATALOG["6205"].bpfo(30.0)
+BPFI = CATALOG["6205"].bpfi(30.0)
 
 
 def residual_msg(hypothesis, i, y, fault_hz):
@@ -38,10 +36,10 @@ def signal_normal_then_or(duration=0.4, change=0.2):
 
 
 def test_states_and_diagnostics_follow_the_residuals(ros_graph):
-    states = ros_graph.subscribe("fault_state", FaultState, LATCHED)
-    diags = ros_graph.subscribe("/diagnostics", DiagnosticArray)
-    pub_or = ros_graph.publisher("residual/outer_race", Residual)
-    pub_ir = ros_graph.publisher("residual/inner_race", Residual)
+    states = ros_graph.subscribe(topics.FAULT_STATE)
+    diags = ros_graph.subscribe(topics.DIAGNOSTICS)
+    pub_or = ros_graph.publisher(topics.RESIDUAL_OUTER_RACE)
+    pub_ir = ros_graph.publisher(topics.RESIDUAL_INNER_RACE)
     node = ros_graph.start("bearing_diagnoser", "diagnoser", params={"stale_timeout": 1.0,
                                                                      "diagnostics_period": 0.2})
     ros_graph.wait_until(lambda: pub_or.get_subscription_count() and pub_ir.get_subscription_count(),
@@ -70,9 +68,9 @@ def test_states_and_diagnostics_follow_the_residuals(ros_graph):
 
 
 def test_one_silent_observer_is_reported_and_decisions_continue(ros_graph):
-    states = ros_graph.subscribe("fault_state", FaultState, LATCHED)
-    diags = ros_graph.subscribe("/diagnostics", DiagnosticArray)
-    pub_or = ros_graph.publisher("residual/outer_race", Residual)
+    states = ros_graph.subscribe(topics.FAULT_STATE)
+    diags = ros_graph.subscribe(topics.DIAGNOSTICS)
+    pub_or = ros_graph.publisher(topics.RESIDUAL_OUTER_RACE)
     ros_graph.start("bearing_diagnoser", "diagnoser", params={"diagnostics_period": 0.2})
     ros_graph.wait_until(lambda: pub_or.get_subscription_count(), 30.0, "the diagnoser to subscribe")
     y = signal_normal_then_or(duration=1.6, change=0.0)

@@ -4,8 +4,7 @@ import pytest
 
 from bearing_bringup.graph import GRAPH, config_path
 from bearing_bringup.state_report import StateChange, evaluate, format_table
-from bearing_msgs.msg import FaultState, VibrationChunk
-from graph_qos import LATCHED
+from bearing_common import topics
 
 pytestmark = pytest.mark.ros
 
@@ -19,9 +18,9 @@ def seconds(stamp):
 
 
 def run_graph(ros_graph, scenario, **sim_params):
-    states = ros_graph.subscribe("fault_state", FaultState, LATCHED)
-    truth = ros_graph.subscribe("sim/truth", FaultState, LATCHED)
-    vib = ros_graph.subscribe("vibration/drive_end", VibrationChunk)
+    states = ros_graph.subscribe(topics.FAULT_STATE)
+    truth = ros_graph.subscribe(topics.TRUTH)
+    vib = ros_graph.subscribe(topics.VIBRATION)
     members = {}
     for spec in GRAPH:
         params = {"scenario": scenario, **sim_params} if spec.executable == "simulator" else None

@@ -5,7 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from bearing_msgs.msg import Residual, VibrationChunk
+from bearing_common import topics
+from bearing_common.states import parse_fault
+from bearing_msgs.msg import VibrationChunk
 from bearing_observer.observer import FaultObserver
 
 pytestmark = pytest.mark.ros
@@ -34,9 +36,8 @@ def synthetic_vibration(n_chunks):
 
 @pytest.mark.parametrize("fault_type, node_name", [("outer_race", "or_observer"), ("inner_race", "ir_observer")])
 def test_residuals_match_offline_observer_and_bad_chunks_are_rejected(ros_graph, fault_type, node_name):
-    topic = f"residual/{fault_type}"
-    received = ros_graph.subscribe(topic, Residual)
-    pub = ros_graph.publisher("vibration/drive_end", VibrationChunk)
+    received = ros_graph.subscribe(topics.residual_topic(parse_fault(fault_type)))
+    pub = ros_graph.publisher(topics.VIBRATION)
     node = ros_graph.start("bearing_observer", "observer", params={"fault_type": fault_type})
     ros_graph.wait_until(lambda: pub.get_subscription_count() > 0, 30.0, "the observer to subscribe")
     y = synthetic_vibration(20)

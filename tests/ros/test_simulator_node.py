@@ -4,8 +4,8 @@ import math
 
 import pytest
 
-from bearing_msgs.msg import FaultState, ShaftSpeed, VibrationChunk
-from graph_qos import LATCHED
+from bearing_common import topics
+from bearing_msgs.msg import FaultState
 
 pytestmark = pytest.mark.ros
 
@@ -17,12 +17,12 @@ def stamp(msg):
 
 
 def test_publishes_gap_free_stamped_chunks_and_exits_at_the_end(ros_graph):
-    vib = ros_graph.subscribe("vibration/drive_end", VibrationChunk)
-    unb = ros_graph.subscribe("unbalance", VibrationChunk)
-    speed = ros_graph.subscribe("shaft_speed", ShaftSpeed)
-    truth = ros_graph.subscribe("sim/truth", FaultState, LATCHED)
+    vib = ros_graph.subscribe(topics.VIBRATION)
+    unb = ros_graph.subscribe(topics.UNBALANCE)
+    speed = ros_graph.subscribe(topics.SHAFT_SPEED)
+    truth = ros_graph.subscribe(topics.TRUTH)
     sim = ros_graph.start("bearing_sim", "simulator", params={
-        "schedule": "outer_race:0.05,normal:0.05", "realtime": False, "wait_for_subscribers": "vibration/drive_end:1"})
+        "schedule": "outer_race:0.05,normal:0.05", "realtime": False, "wait_for_subscribers": f"{topics.VIBRATION.name}:1"})
     ros_graph.wait_until(lambda: sim.returncode is not None, timeout=120.0, what="the simulator to exit")
     assert sim.returncode == 0, ros_graph.output()
     assert len(vib) == 10 and len(unb) == 10, f"{len(vib)} chunks\n{ros_graph.output()}"
@@ -38,11 +38,11 @@ def test_publishes_gap_free_stamped_chunks_and_exits_at_the_end(ros_graph):
 
 
 def test_realtime_pacing_keeps_wall_clock(ros_graph):
-    vib = ros_graph.subscribe("vibration/drive_end", VibrationChunk)
+    vib = ros_graph.subscribe(topics.VIBRATION)
     import time
     start = time.monotonic()
     sim = ros_graph.start("bearing_sim", "simulator", params={"scenario": "normal", "segment_duration": 0.5,
-                                                              "wait_for_subscribers": "vibration/drive_end:1"})
+                                                              "wait_for_subscribers": f"{topics.VIBRATION.name}:1"})
     ros_graph.wait_until(lambda: sim.returncode is not None, timeout=120.0, what="the simulator to exit")
     assert sim.returncode == 0, ros_graph.output()
     assert len(vib) == 50

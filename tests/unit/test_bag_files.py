@@ -2,7 +2,7 @@
 
 No DDS here: messages are serialized with rclpy.serialization (no graph needed) or with the
 rosbags type store; every bag written is checked with the independent ``mcap_ros2``
-decoder (mcap-ros2-support) or with ``bearing_diagnoser.bag_files``.
+decoder (mcap-ros2-support) or with ``bearing_recordings.bag_read``.
 """
 
 from __future__ import annotations
@@ -15,17 +15,26 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from bearing_diagnoser.bag_files import (BagError, Chunk, join_chunks, load_bag, project_typestore, read_bag,
-                                         truth_per_sample)
-from bearing_bringup import bag_cli
-from bearing_bringup.bag_write import BagWriter, mat_to_bag
-
-G = 9.80665
+from bearing_common import topics
+from bearing_common.units import STANDARD_GRAVITY as G
+from bearing_recordings import bag_cli
+from bearing_recordings.bag_read import Chunk, StateSample, join_chunks, load_bag, read_bag, truth_per_sample
+from bearing_recordings.bag_types import BagError, project_typestore
+from bearing_recordings.bag_write import BagWriter, recording_to_bag
+from bearing_recordings.load import load_recording
+from bearing_recordings.mat_files import load_mat
 RECORD_105 = "105_IR007_0hp_DE12k.mat"
+VIB, SPEED, RES_IR, STATE = (topics.qualified("", t) for t in (topics.VIBRATION, topics.SHAFT_SPEED,
+                                                                topics.RESIDUAL_INNER_RACE, topics.FAULT_STATE))
 
 
 # ----------------------------------------------------------------------------------------
 # helpers
+
+
+def mat_to_bag(path, out, sample_rate, rpm=None, **kwargs):
+    """``bearing-bag from-mat`` without the command line."""
+    return recording_to_bag(load_mat(path, sample_rate, rpm), out, **kwargs)
 
 
 def rclpy_messages():
@@ -62,12 +71,12 @@ def rclpy_messages():
     state.scores = [7.5, 0.25]
     state.model_set = "sim_48k"
     state.detail = "ünïcode ok"
-    return {"/vibration/drive_end": chunk, "/shaft_speed": speed, "/residual/inner_race": res,
-            "/fault_state": state}
+    return {VIB: chunk, SPEED: speed, RES_IR: res,
+            STATE: state}
 
 
-TYPES = {"/vibration/drive_end": "bearing_msgs/msg/VibrationChunk", "/shaft_speed": "bearing_msgs/msg/ShaftSpeed",
-         "/residual/inner_race": "bearing_msgs/msg/Residual", "/fault_state": "bearing_msgs/msg/FaultState"}
+TYPES = {topics.qualified("", t): t.msgtype
+         for t in (topics.VIBRATION, topics.SHAFT_SPEED, topics.RESIDUAL_INNER_RACE, topics.FAULT_STATE)}
 
 
 def fields_of(msg):
@@ -88,7 +97,7 @@ def write_rclpy_bag(out: pathlib.Path, storage: str = "mcap"):
     msgs = rclpy_messages()
     with BagWriter(out, storage) as bag:
         for i, (topic, msg) in enumerate(msgs.items()):
-            bag.add_topic(topic, TYPES[topic], latched=topic == "/fault_state", depth=50)
+            bag.add_topic(topic, TYPES[topic], latched=topic == STATE, depth=50)
             bag.write(topic, 1_000_000_000 + i, serialize_message(msg))
     return msgs
 
@@ -138,7 +147,7 @@ def test_written_bag_decodes_with_mcap_ros2_field_for_field(tmp_path):
         text = decoded.schema.data.decode()
         assert "MSG: std_msgs/Header" in text and "MSG: builtin_interfaces/Time" in text
         assert fields_of(decoded.ros_msg) == fields_of(msg), topic
-    assert got["/vibration/drive_end"].log_time_ns == 1_000_000_000
+    assert got[VIB].log_time_ns == 1_000_000_000
 
 
 def test_embedded_type_hashes_are_the_ones_ros_computes():
@@ -163,7 +172,7 @@ def test_bag_files_reads_back_what_was_written(tmp_path, storage):
     contents = read_bag(tmp_path / "bag")
     assert contents.storage == storage and contents.namespace == ""
     (chunk,) = contents.chunks
-    want = sent["/vibration/drive_end"]
+    want = sent[VIB]
     assert chunk.stamp == pytest.approx(12.345) and chunk.first_sample_index == 2**40 + 7
     assert chunk.sample_rate == 48000.0 and chunk.source == "simulator" and chunk.frame_id == "drive_end"
     assert_array_equal(chunk.samples, np.asarray(want.samples))
@@ -178,11 +187,11 @@ def test_bag_files_reads_back_what_was_written(tmp_path, storage):
 
 def test_namespaced_topics_are_found_and_ambiguity_is_an_error(tmp_path):
     from rclpy.serialization import serialize_message
-    msg = rclpy_messages()["/vibration/drive_end"]
+    msg = rclpy_messages()[VIB]
     with BagWriter(tmp_path / "bag", namespace="m1") as bag:
         for ns in ("m1", "m2"):
-            bag.add_topic(f"/{ns}/vibration/drive_end", TYPES["/vibration/drive_end"])
-            bag.write(f"/{ns}/vibration/drive_end", 1, serialize_message(msg))
+            bag.add_graph_topic(topics.VIBRATION, ns)
+            bag.write(topics.qualified(ns, topics.VIBRATION), 1, serialize_message(msg))
     with pytest.raises(BagError, match="several namespaces"):
         read_bag(tmp_path / "bag")
     assert read_bag(tmp_path / "bag", namespace="m2").namespace == "m2"
@@ -216,7 +225,6 @@ def test_join_chunks_rejects_mixed_streams():
 
 
 def test_truth_per_sample_follows_onsets():
-    from bearing_diagnoser.bag_files import StateSample
     truth = [StateSample(0.0, 0, 1.0, 0.0, {}, "", "", 0.0), StateSample(0.3, 1, 1.0, 0.25, {}, "", "", 0.3)]
     per = truth_per_sample(truth, 0.0, 10, 20.0)  # samples at 0, 0.05, ..., 0.45
     assert_array_equal(per, [0, 0, 0, 0, 0, 1, 1, 1, 1, 1])
@@ -240,8 +248,8 @@ def test_from_mat_chunks_units_and_speed(tmp_path, record_105):
                        "--duration", "0.255", "--out", str(out)])
     assert rc == 0
     msgs = list(read_ros2_messages(str(next(out.glob("*.mcap")))))
-    chunks = [m for m in msgs if m.channel.topic == "/vibration/drive_end"]
-    speeds = [m for m in msgs if m.channel.topic == "/shaft_speed"]
+    chunks = [m for m in msgs if m.channel.topic == VIB]
+    speeds = [m for m in msgs if m.channel.topic == SPEED]
     # 0.255 s at 12 kHz = 3060 samples = 25 chunks of 120 + one of 60
     assert len(chunks) == 26 and len(speeds) == 26
     assert [len(m.ros_msg.samples) for m in chunks] == [120] * 25 + [60]
@@ -265,13 +273,13 @@ def test_from_mat_rpm_start_time_and_sqlite3(tmp_path, record_105):
     out = tmp_path / "cwru"
     res = mat_to_bag(record_105, out, 12000.0, rpm=1750.0, chunk_duration=0.02, start_time=100.5,
                      storage="sqlite3", namespace="rig", max_duration=0.1)
-    assert res.chunks == 5 and res.rpm_from == "command line"
+    assert res.chunks == 5 and res.rpm == 1750.0
     contents = read_bag(out)
     assert contents.storage == "sqlite3" and contents.namespace == "rig"
     assert [c.stamp for c in contents.chunks] == pytest.approx([100.5, 100.52, 100.54, 100.56, 100.58])
     assert [c.first_sample_index for c in contents.chunks] == [0, 240, 480, 720, 960]
     assert contents.rpm == pytest.approx(1750.0)
-    assert {s.source for s in contents.speeds} == {"command_line"}
+    assert {s.source for s in contents.speeds} == {"cwru"}
     assert load_bag(out).start_time == pytest.approx(100.5)
 
 
@@ -327,15 +335,15 @@ def test_bad_bags_give_one_error_line(tmp_path, capsys):
         read_bag(tmp_path / "garbage")
     assert bag_cli.main(["info", str(tmp_path / "good")]) == 0
     out = capsys.readouterr().out
-    assert "/vibration/drive_end" in out and "bearing_msgs/msg/VibrationChunk" in out and "mcap" in out
+    assert VIB in out and "bearing_msgs/msg/VibrationChunk" in out and "mcap" in out
 
 
 def test_wrong_types_and_missing_topics_are_reported(tmp_path):
     store = project_typestore()
     with BagWriter(tmp_path / "wrong") as bag:
-        bag.add_topic("/vibration/drive_end", "std_msgs/msg/String")
+        bag.add_topic(VIB, "std_msgs/msg/String")
         msg = store.types["std_msgs/msg/String"](data="not a chunk")
-        bag.write("/vibration/drive_end", 1, bag.serialize(msg, "std_msgs/msg/String"))
+        bag.write(VIB, 1, bag.serialize(msg, "std_msgs/msg/String"))
     with pytest.raises(BagError, match="has type std_msgs/msg/String, expected bearing_msgs/msg/VibrationChunk"):
         read_bag(tmp_path / "wrong")
     with BagWriter(tmp_path / "other") as bag:
@@ -346,15 +354,14 @@ def test_wrong_types_and_missing_topics_are_reported(tmp_path):
 
 
 def test_bag_error_is_an_input_error_for_bearing_diagnose():
-    from bearing_diagnoser.signal_files import InputError
+    from bearing_recordings.recording import InputError
     assert issubclass(BagError, InputError)
 
 
 def test_bearing_diagnose_reads_a_bag(tmp_path, record_105, capsys):
-    """``bearing-diagnose BAG_DIR`` on a CWRU bag (signal_files.load_bag → bag_files.load_bag)."""
-    from bearing_diagnoser import signal_files
+    """``bearing-diagnose BAG_DIR`` on a CWRU bag (load_recording → bag_read.load_bag)."""
     mat_to_bag(record_105, tmp_path / "bag", 12000.0, max_duration=0.5)
-    rec = signal_files.load_recording(tmp_path / "bag")
+    rec = load_recording(tmp_path / "bag")
     assert rec.source == "cwru" and rec.accel.size == 6000 and rec.rpm == pytest.approx(1797.0)
     from bearing_diagnoser.diagnose_cli import main as diagnose
     assert diagnose([str(tmp_path / "bag")]) == 0

@@ -89,7 +89,7 @@ def _mkdir(path):
 
 @pytest.mark.parametrize("make, message", [
     (lambda p: p / "missing.npz", "no such file"),
-    (lambda p: _write(p / "bad.mat", b"garbage"), "sample rate"),
+    (lambda p: _write(p / "bad.mat", b"garbage"), "not a readable MATLAB"),
     (lambda p: _write(p / "bad.npz", b"not a zip"), "not a readable .npz"),
     (lambda p: _write(p / "x.csv", "1,2"), "unknown file type"),
     (lambda p: write_npz(p / "nan.npz", np.r_[np.zeros(100), np.nan, np.zeros(50000)]), "non-finite"),
@@ -118,7 +118,7 @@ def test_malformed_mat_file(tmp_path, capsys):
 def test_bad_options_are_rejected(or_npz, capsys):
     for argv, message in (([or_npz, "--sample-rate", "0"], "positive"),
                           ([or_npz, "--sample-rate", "-5"], "positive"),
-                          ([or_npz, "--rpm", "-1"], "rpm must be positive"),
+                          ([or_npz, "--rpm", "-1"], "shaft speed must be a positive"),
                           ([or_npz, "--model-set", "nope"], "unknown model set")):
         code, lines, err = run(argv, capsys)
         assert code != 0 and lines == [] and message in err, err

@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency
-from bearing_sim.fault_states import FaultState
+from bearing_common.bearings import CATALOG, fault_frequency
+DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+from bearing_common.states import FaultState
 
 from bearing_diagnoser.bearing_lines import bearing_lines, decoy_frequencies
 from bearing_diagnoser.calibration import calibrate
@@ -81,11 +82,11 @@ def test_energy_envelope_is_chunk_invariant():
 
 def test_thresholds_are_derived_from_the_stated_false_alarm_rate():
     cfg = config_for("sim_48k")
-    loose = calibrate(replace(cfg, pfa=1e-2), FS)
-    strict = calibrate(cfg, FS)
+    loose = calibrate(replace(cfg, pfa=1e-2), FS, Diagnoser)
+    strict = calibrate(cfg, FS, Diagnoser)
     assert 0.8 < strict["cfar_median"] < 1.2  # CFAR statistic ≈ 1 on noise
     assert 1.0 < loose["threshold"] < strict["threshold"] < 5.0
-    assert strict == calibrate(cfg, FS)  # deterministic
+    assert strict == calibrate(cfg, FS, Diagnoser)  # deterministic
 
 
 # ---------------------------------------------------------------------------------------

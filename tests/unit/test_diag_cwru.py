@@ -14,7 +14,7 @@ import functools
 
 import pytest
 
-from bearing_sim.fault_states import FaultState
+from bearing_common.states import FaultState
 
 from bearing_diagnoser.cwru_report import RECORDS, load_record, markdown, summarise
 from bearing_diagnoser.offline import diagnose_recording

@@ -14,10 +14,10 @@ import functools
 import numpy as np
 import pytest
 
-from bearing_diagnoser.diag_benchmarks import score_case, simulate_case
+from benchmarks.evaluation import score_case, simulate_case
 from bearing_diagnoser.offline import diagnose_recording
-from bearing_diagnoser.signal_files import Recording
-from bearing_sim.fault_states import FaultState
+from bearing_recordings.recording import Recording
+from bearing_common.states import FaultState
 from bearing_sim.simulator import SimulationConfig, simulate
 
 DELAY_MAX = 0.05  # s, after the true change

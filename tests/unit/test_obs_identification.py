@@ -8,10 +8,10 @@ from scipy import signal
 from bearing_observer.identification import (
     estimate_fault_phase, fit_percent, hw_fit, identify_fault_model, oe_fit,
     poly_to_reflection, reflection_to_poly)
-from bearing_observer.identify_cli import load_mat_record
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
 from bearing_observer.piecewise_linear import MonotonePiecewiseLinear
-from bearing_sim.fault_states import FaultState
+from bearing_common.states import FaultState
+from bearing_recordings.mat_files import load_mat
 from bearing_sim.simulator import SimulationConfig, simulate
 
 FS = 48000.0
@@ -108,8 +108,9 @@ def test_simulator_models_fit_at_least_70_percent(sim_data, fault):
 
 # --- CWRU ---------------------------------------------------------------------------------
 def test_cwru_outer_race_identification(cwru_record):
-    y, rpm, ch = load_mat_record(cwru_record("130_OR007at6_0hp_DE12k.mat"))
-    assert ch == "X130_DE_time" and rpm == 1796.0
+    rec = load_mat(cwru_record("130_OR007at6_0hp_DE12k.mat"), 12000.0)
+    y, rpm = rec.accel, rec.rpm
+    assert rec.channel == "X130_DE_time" and rpm == 1796.0
     r = identify_fault_model(y[:12000], 12000.0, rpm, "outer_race")
     # slip: measured BPFO within 1 % above/below the kinematic value, and not equal to it
     assert abs(r.info["fault_frequency"] / r.info["kinematic_frequency"] - 1) < 0.01

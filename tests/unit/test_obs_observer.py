@@ -6,10 +6,10 @@ from numpy.testing import assert_allclose
 
 from bearing_observer.hw_model import load_model_set
 from bearing_observer.identification import identify_fault_model
-from bearing_observer.identify_cli import load_mat_record
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
 from bearing_observer.observer import FaultObserver, ModalFilter, balanced_realization
-from bearing_sim.fault_states import FaultState
+from bearing_common.states import FaultState
+from bearing_recordings.mat_files import load_mat
 from bearing_sim.simulator import SimulationConfig, simulate
 
 FS = 48000.0
@@ -204,8 +204,8 @@ def test_cwru_phase_locks_only_on_matching_fault(cwru_record):
     paths = {rec: cwru_record(name)  # skips with the reason when a record is absent
              for rec, name in (("130", "130_OR007at6_0hp_DE12k.mat"), ("105", "105_IR007_0hp_DE12k.mat"))}
     for rec, path in paths.items():
-        y, rpm, _ = load_mat_record(path)
-        y = y[:60000]
+        record = load_mat(path, 12000.0)
+        y, rpm = record.accel[:60000], record.rpm
         for ft, m in models.items():
             obs = FaultObserver(m, rpm=rpm)
             phases = []

@@ -5,7 +5,7 @@ import os
 import numpy as np
 import pytest
 
-from bearing_sim.fault_states import FaultState as F
+from bearing_common.states import FaultState as F
 from bearing_sim.schedule import SCENARIOS, parse_schedule, scenario
 from bearing_sim.sim_cli import main
 

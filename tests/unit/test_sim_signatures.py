@@ -11,8 +11,9 @@ import pytest
 from scipy import signal
 
 from bearing_sim.defects import inner_race_window, outer_race_window
-from bearing_sim.fault_states import FaultState as F
-from bearing_sim.model_parameters import ModelParameters, STANDARD_G
+from bearing_common.states import FaultState as F
+from bearing_common.units import STANDARD_GRAVITY
+from bearing_sim.model_parameters import ModelParameters
 from bearing_sim.simulator import SimulationConfig, simulate
 
 FS = 48000.0
@@ -59,7 +60,7 @@ def test_envelope_peak_at_fault_frequency(state, rpm):
     # the other race's frequency is not a signature of this fault
     assert spectrum_at(freqs, spec, f_other) < 0.2 * a_peak
     # level: model-notes quote about 3 g RMS for both faults
-    rms_g = np.std(d["accel"]) / STANDARD_G
+    rms_g = np.std(d["accel"]) / STANDARD_GRAVITY
     assert 1.0 < rms_g < 6.0
 
 
@@ -72,7 +73,7 @@ def test_normal_shows_neither_signature():
     assert spectrum_at(fn, sn, params.bpfo) < 1e-4 * peak_near(fo, so, params.bpfo)[1]
     assert spectrum_at(fn, sn, params.bpfi) < 1e-4 * peak_near(fi, si, params.bpfi)[1]
     # almost silent: only a tiny unbalance excites it (model-notes: ~2e-5 g RMS or less)
-    assert np.std(normal["accel"]) / STANDARD_G < 1e-4
+    assert np.std(normal["accel"]) / STANDARD_GRAVITY < 1e-4
     assert np.all(np.isfinite(normal["accel"]))
 
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from bearing_sim.fault_states import FaultState as F
-from bearing_sim.model_parameters import STANDARD_G
+from bearing_common.states import FaultState as F
+from bearing_common.units import STANDARD_GRAVITY
 from bearing_sim.simulator import DEFAULT_NOISE_DENSITY, SimChunk, SimulationConfig, Simulator, simulate
 
 
@@ -43,7 +43,7 @@ def test_determinism_and_noise_level():
     assert not np.array_equal(a, c)
     # white noise: RMS = density * sqrt(fs/2) = 0.70 m/s^2 (about 0.07 g, CWRU record 97)
     assert np.std(a) == pytest.approx(DEFAULT_NOISE_DENSITY * np.sqrt(24000.0), rel=0.03)
-    assert np.std(a) / STANDARD_G == pytest.approx(0.071, rel=0.05)
+    assert np.std(a) / STANDARD_GRAVITY == pytest.approx(0.071, rel=0.05)
     quiet = simulate(SimulationConfig(), sched)["accel"]
     assert np.std(quiet) < 1e-3 * np.std(a)
 
@@ -91,7 +91,7 @@ def test_long_span_stable_no_drift():
     d = simulate(SimulationConfig(sample_rate=12000.0), sched)
     x, t = d["accel"], d["t"]
     assert np.all(np.isfinite(x))
-    assert np.max(np.abs(x)) < 50 * STANDARD_G
+    assert np.max(np.abs(x)) < 50 * STANDARD_GRAVITY
     first_or = np.std(x[(t > 0.05) & (t < 0.15)])
     last_or_window = np.std(x[(t > 0.2) & (t < 0.3)])
     assert last_or_window == pytest.approx(first_or, rel=0.3)  # stationary, not growing

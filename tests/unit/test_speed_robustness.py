@@ -4,10 +4,10 @@ approximate and bearings slip 1-2 %; the decision must stay correct when told th
 
 import pytest
 
-from bearing_diagnoser.diag_benchmarks import score_case, simulate_case
+from benchmarks.evaluation import score_case, simulate_case
 from bearing_diagnoser.offline import diagnose_recording
-from bearing_diagnoser.signal_files import load_recording
-from bearing_sim.fault_states import FaultState
+from bearing_recordings.load import load_recording
+from bearing_common.states import FaultState
 
 NOISE = 4.5e-3  # (m/s^2)/sqrt(Hz), the real CWRU normal record's level
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from bearing_sim.stamps import to_seconds, to_stamp
+from bearing_common.stamps import to_seconds, to_stamp
 
 
 @pytest.mark.parametrize("t, sec, nanosec", [(0.0, 0, 0), (0.01, 0, 10_000_000), (12.345, 12, 345_000_000),

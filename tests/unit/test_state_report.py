@@ -3,7 +3,7 @@
 import pytest
 
 from bearing_bringup.state_report import StateChange, evaluate, format_table, truth_segments
-from bearing_sim.fault_states import FaultState
+from bearing_common.states import FaultState
 
 N, OR, IR = FaultState.NORMAL, FaultState.OUTER_RACE, FaultState.INNER_RACE
 TRUTH = [StateChange(OR, 0.0, 0.0), StateChange(IR, 0.2, 0.2)]

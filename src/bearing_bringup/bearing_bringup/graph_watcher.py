@@ -10,16 +10,15 @@ from typing import Callable, Optional
 import numpy as np
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+from bearing_common import topics
 from bearing_msgs.msg import FaultState as FaultStateMsg, VibrationChunk
-from bearing_sim.fault_states import FaultState
-from bearing_sim.stamps import to_seconds
+from bearing_common.states import FaultState
+from bearing_common.stamps import to_seconds
 
 from .state_report import StateChange
 
-LATCHED = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-STREAM = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+QUEUE = 100  # subscription depth: every state change is kept, even when this thread lags
 KEEP_SIGNAL_S = 60.0  # seconds of vibration kept for the plot
 
 
@@ -38,9 +37,11 @@ class GraphWatcher:
         rclpy.init(context=self.context)
         ns = f"/{namespace.strip('/')}" if namespace else ""
         self.node = rclpy.create_node("graph_watcher", namespace=ns or None, context=self.context)
-        self.node.create_subscription(FaultStateMsg, "fault_state", self._on_state, LATCHED)
-        self.node.create_subscription(FaultStateMsg, "sim/truth", self._on_truth, LATCHED)
-        self.node.create_subscription(VibrationChunk, "vibration/drive_end", self._on_chunk, STREAM)
+        self.node.create_subscription(FaultStateMsg, topics.FAULT_STATE.name, self._on_state,
+                                      topics.qos(topics.FAULT_STATE, depth=QUEUE))
+        self.node.create_subscription(FaultStateMsg, topics.TRUTH.name, self._on_truth, topics.qos(topics.TRUTH, depth=QUEUE))
+        self.node.create_subscription(VibrationChunk, topics.VIBRATION.name, self._on_chunk,
+                                      topics.qos(topics.VIBRATION, depth=QUEUE))
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self._running = True

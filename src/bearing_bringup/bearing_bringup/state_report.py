@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional, Sequence
 
-from bearing_sim.fault_states import FaultState
+from bearing_common.states import FaultState
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Bearing line frequencies and the "decoy" frequencies used for CFAR normalisation.
 
-The characteristic frequencies come from ``bearing_sim.bearing_geometry`` (thesis
+The characteristic frequencies come from ``bearing_common.bearings`` (thesis
 section 2.2, eqs. 2.51-2.54); this module only lists them and picks nearby
 frequencies where no bearing or shaft line lies.  The periodicity statistic at such a
 decoy frequency measures what the same stream, in the same window, gives "by chance";
@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from bearing_sim.bearing_geometry import DRIVE_END_6205, BearingGeometry, shaft_hz
+from bearing_common.bearings import CATALOG, Bearing as BearingGeometry, shaft_hz
+DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 
 
 def bearing_lines(rpm: float, geometry: BearingGeometry = DRIVE_END_6205,

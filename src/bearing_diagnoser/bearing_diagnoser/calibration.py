@@ -33,11 +33,13 @@ def _tail_quantile(x: np.ndarray, pfa: float) -> float:
 
 
 @lru_cache(maxsize=32)
-def _calibrate(cfg, sample_rate: float) -> dict:
-    from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency
-    from .decision import Diagnoser, HYPOTHESES
+def _calibrate(cfg, sample_rate: float, diagnoser_cls) -> dict:
+    from bearing_common.bearings import CATALOG, fault_frequency
+    DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+    from bearing_common.states import FaultState
+    HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE)
     c = replace(cfg, hop_s=cfg.window_s, threshold=2.0, kurtosis_threshold=1e9, k_of_n=(1, 1), rms_floor=0.0)
-    dg = Diagnoser(c, model_set="calibration")
+    dg = diagnoser_cls(c, model_set="calibration")
     dg.keep_history = False
     rng = np.random.default_rng(SEED)
     n = int(round((N_WINDOWS + 1) * cfg.window_s * sample_rate))
@@ -56,7 +58,7 @@ def _calibrate(cfg, sample_rate: float) -> dict:
             "cfar_p99": float(np.quantile(cf, 0.99)), "kurtosis_median": float(np.median(ku))}
 
 
-def calibrate(cfg, sample_rate: float) -> dict:
+def calibrate(cfg, sample_rate: float, diagnoser_cls) -> dict:
     """Thresholds for ``cfg`` at ``sample_rate`` (Hz) from ``cfg.pfa`` on white noise.
 
     Returns a dict: ``threshold`` (CFAR periodicity), ``kurtosis_threshold``,
@@ -64,4 +66,4 @@ def calibrate(cfg, sample_rate: float) -> dict:
     Deterministic (fixed seed); cached per (configuration, rate).
     """
     key = replace(cfg, threshold=None, kurtosis_threshold=None)
-    return dict(_calibrate(key, float(sample_rate)))
+    return dict(_calibrate(key, float(sample_rate), diagnoser_cls))

@@ -20,10 +20,13 @@ import sys
 
 import numpy as np
 
-from bearing_sim.fault_states import FaultState
+from bearing_common.states import FaultState
 
-from .offline import diagnose_recording, resample
-from .signal_files import InputError, Recording, load_recording
+from bearing_recordings.load import load_recording
+from bearing_recordings.recording import InputError, Recording
+from bearing_recordings.resampling import resample
+
+from .offline import diagnose_recording
 
 #: (file, sample rate Hz, truth, note)
 RECORDS = (

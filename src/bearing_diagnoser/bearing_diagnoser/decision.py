@@ -55,9 +55,10 @@ import math
 
 import numpy as np
 
-from bearing_sim.fault_states import FaultState
+from bearing_common.states import FaultState
 
 from .bearing_lines import decoy_frequencies
+from .calibration import calibrate
 from .periodicity import (EnergyEnvelope, cfar_periodicity, cfar_ses, explain_away, impact_phase_mask,
                            period_grid, train_correlation)
 
@@ -332,8 +333,7 @@ class Diagnoser:
         if self._thresholds is None:
             thr, kthr = self.config.threshold, self.config.kurtosis_threshold
             if thr is None or kthr is None:
-                from .calibration import calibrate
-                cal = calibrate(self.config, self._sample_rate or 48000.0)
+                cal = calibrate(self.config, self._sample_rate or 48000.0, type(self))
                 thr = cal["threshold"] if thr is None else thr
                 kthr = cal["kurtosis_threshold"] if kthr is None else kthr
             self._thresholds = (float(thr), float(kthr))
@@ -346,7 +346,8 @@ class Diagnoser:
         speed), computed once at the nominal speed and rescaled.
         """
         if hypothesis not in self._decoy_ratio:
-            from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency
+            from bearing_common.bearings import CATALOG, fault_frequency
+            DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
             f0 = fault_frequency(DRIVE_END_6205, hypothesis, self.config.nominal_rpm)
             self._decoy_ratio[hypothesis] = decoy_frequencies(
                 f0, self.config.nominal_rpm, self.config.n_decoys, self.config.window_s,
@@ -360,7 +361,8 @@ class Diagnoser:
         (1..5) of the other race frequency, where the other fault would pass for this
         one: for the 6205, OR keeps (1, 2) and IR keeps (1, 3) (3·BPFO ≈ 2·BPFI).
         """
-        from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency
+        from bearing_common.bearings import CATALOG, fault_frequency
+        DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
         f = fault_frequency(DRIVE_END_6205, hypothesis, self.config.nominal_rpm)
         other = [fault_frequency(DRIVE_END_6205, h, self.config.nominal_rpm) for h in HYPOTHESES if h != hypothesis]
         return tuple(k for k in range(1, self.config.ses_harmonics + 1)

@@ -35,7 +35,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     """Run the CLI; returns the exit status (0 on success)."""
-    from .signal_files import InputError, load_recording
+    from bearing_recordings.load import load_recording
+    from bearing_recordings.recording import InputError
+
     from .offline import diagnose_recording
 
     args = build_parser().parse_args(argv)
@@ -50,7 +52,7 @@ def main(argv=None) -> int:
         print(json.dumps(seg.to_json()), flush=True)
     if args.plot:
         try:
-            from .diagnosis_figures import write_figures
+            from .plots import write_figures
             paths = write_figures(res, args.plot)
             print(f"bearing-diagnose: wrote {len(paths)} figures to {args.plot}", file=sys.stderr)
         except OSError as exc:

@@ -1,7 +1,7 @@
-"""Parameters, topics and /diagnostics contents of the ``diagnoser`` node (no rclpy)."""
+"""Parameters and /diagnostics contents of the ``diagnoser`` node (no rclpy)."""
 
-from bearing_sim.fault_states import FaultState
-from bearing_sim.ros_parameters import ParameterSpec, positive
+from bearing_common.states import FaultState
+from bearing_common.parameters import ParameterSpec, positive
 
 PARAMETERS = (
     ParameterSpec("model_set", "", "decision defaults of this model set (window, band, thresholds); "
@@ -15,10 +15,6 @@ PARAMETERS = (
     ParameterSpec("stale_timeout", 1.0, "seconds without residuals before /diagnostics reports STALE", positive),
     ParameterSpec("diagnostics_period", 1.0, "seconds between /diagnostics messages", positive),
 )
-
-TOPICS_RESIDUAL = {FaultState.OUTER_RACE: "residual/outer_race", FaultState.INNER_RACE: "residual/inner_race"}
-TOPIC_SPEED = "shaft_speed"
-TOPIC_STATE = "fault_state"
 
 # diagnostic_msgs/DiagnosticStatus levels (OK=0, WARN=1, ERROR=2, STALE=3) per published state.
 LEVEL_OK, LEVEL_WARN, LEVEL_ERROR, LEVEL_STALE = 0, 1, 2, 3

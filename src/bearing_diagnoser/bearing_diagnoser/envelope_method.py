@@ -24,7 +24,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency
+from bearing_common.bearings import CATALOG, fault_frequency
+DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 
 from .decision import HYPOTHESES, Decision, Diagnoser, DiagnoserConfig
 

@@ -14,21 +14,18 @@ import sys
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+from bearing_common import topics
 from bearing_msgs.msg import FaultState as FaultStateMsg, Residual, ShaftSpeed
 from bearing_observer.chunk_stream import ChunkStream
 from bearing_observer.hw_model import DEFAULT_SETS
-from bearing_sim.fault_states import FaultState
-from bearing_sim.node_main import run_node_main
-from bearing_sim.stamps import to_seconds, to_stamp
-from bearing_sim.ros_parameters import declare
+from bearing_common.states import FaultState
+from bearing_common.node_main import run_node_main
+from bearing_common.stamps import to_seconds, to_stamp
+from bearing_common.parameters import declare
 
 from .decision import Diagnoser, config_for
-from .diagnoser_node_config import PARAMETERS, TOPIC_SPEED, TOPIC_STATE, TOPICS_RESIDUAL, health
-
-STREAM_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
-STATE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+from .diagnoser_node_config import PARAMETERS, health
 WARN_PERIOD_S = 5.0
 
 
@@ -41,16 +38,16 @@ class DiagnoserNode(Node):
         self.core = None
         self.core_streams = set()  # hypotheses that have fed the current core (a restart of either starts a new one)
         self.time_offset = None  # stamp of sample index 0 (s)
-        self.streams = {h: ChunkStream(topic) for h, topic in TOPICS_RESIDUAL.items()}
-        self.last_heard = {h: None for h in TOPICS_RESIDUAL}
+        self.streams = {h: ChunkStream(topic.name) for h, topic in topics.RESIDUALS.items()}
+        self.last_heard = {h: None for h in topics.RESIDUALS}
         self.last_decision = None
         self.shaft_speed = None
         self.warm_thresholds()  # before subscribing: being subscribed means being ready
-        self.pub_state = self.create_publisher(FaultStateMsg, TOPIC_STATE, STATE_QOS)
-        self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        for h, topic in TOPICS_RESIDUAL.items():
-            self.create_subscription(Residual, topic, lambda msg, h=h: self.on_residual(h, msg), STREAM_QOS)
-        self.create_subscription(ShaftSpeed, TOPIC_SPEED, self.on_speed, QoSProfile(depth=10))
+        self.pub_state = self.create_publisher(FaultStateMsg, topics.FAULT_STATE.name, topics.qos(topics.FAULT_STATE))
+        self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
+        for h, topic in topics.RESIDUALS.items():
+            self.create_subscription(Residual, topic.name, lambda msg, h=h: self.on_residual(h, msg), topics.qos(topic))
+        self.create_subscription(ShaftSpeed, topics.SHAFT_SPEED.name, self.on_speed, topics.qos(topics.SHAFT_SPEED))
         self.create_timer(float(self.values["diagnostics_period"]), self.publish_diagnostics)
 
     def warm_thresholds(self) -> None:
@@ -128,10 +125,10 @@ class DiagnoserNode(Node):
     def publish_diagnostics(self) -> None:
         now = self.get_clock().now()
         timeout = float(self.values["stale_timeout"])
-        silent = [TOPICS_RESIDUAL[h] for h, t in self.last_heard.items()
+        silent = [topics.RESIDUALS[h].name for h, t in self.last_heard.items()
                   if t is None or (now - t).nanoseconds * 1e-9 > timeout]
         state = self.last_decision.state if self.last_decision else FaultState.NORMAL
-        level, message = health(state, silent, len(silent) == len(TOPICS_RESIDUAL))
+        level, message = health(state, silent, len(silent) == len(topics.RESIDUALS))
         status = DiagnosticStatus(level=bytes([level]), name=f"{self.get_name()}: bearing drive_end",
                                   message=message, hardware_id="drive_end")
         values = {"state": FaultState(state).name}
@@ -142,7 +139,7 @@ class DiagnoserNode(Node):
         if self.shaft_speed is not None:
             values["shaft speed (rad/s)"] = f"{self.shaft_speed:.3f}"
         for h, stream in self.streams.items():
-            values[f"{TOPICS_RESIDUAL[h]} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
+            values[f"{topics.RESIDUALS[h].name} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
         status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
         array = DiagnosticArray(status=[status])
         array.header.stamp = now.to_msg()

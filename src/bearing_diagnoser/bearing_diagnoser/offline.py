@@ -11,18 +11,18 @@ by the measurement itself and the folding statistic by the squared envelope spec
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from fractions import Fraction
 import sys
 import time
 
 import numpy as np
-from scipy import signal
 
-from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency
-from bearing_sim.fault_states import FaultState
+from bearing_common.bearings import CATALOG, fault_frequency
+DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+from bearing_common.states import FaultState
 
 from .decision import HYPOTHESES, Decision, Diagnoser, config_for
-from .signal_files import InputError, Recording
+from bearing_recordings.recording import InputError, Recording
+from bearing_recordings.resampling import resample
 
 #: Model-set rates (Hz) and sources; mirrors bearing_observer.hw_model.DEFAULT_SETS.
 MODEL_SETS = {"sim_48k": ("simulator", 48000.0), "sim_12k": ("simulator", 12000.0),
@@ -63,14 +63,6 @@ def choose_model_set(rec: Recording, requested: str | None = None) -> str:
     if rec.source == "cwru":
         return "cwru_de_6205"
     return "sim_12k" if rec.sample_rate <= 12000.0 else "sim_48k"
-
-
-def resample(x: np.ndarray, rate_in: float, rate_out: float) -> np.ndarray:
-    """Anti-aliased polyphase resampling (scipy.signal.resample_poly, Kaiser window)."""
-    if abs(rate_in - rate_out) < 1e-9 * rate_out:
-        return x
-    frac = Fraction(rate_out / rate_in).limit_denominator(1000)
-    return signal.resample_poly(x, frac.numerator, frac.denominator)
 
 
 @dataclass
@@ -164,7 +156,7 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     Parameters
     ----------
     rec : Recording
-        From :func:`.signal_files.load_recording`.
+        From :func:`bearing_recordings.load.load_recording`.
     model_set : str, optional
         Override the automatic choice (:func:`choose_model_set`).
     method : ``"model"`` or ``"envelope"``

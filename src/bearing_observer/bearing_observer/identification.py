@@ -44,8 +44,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize, signal
 
-from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency as kinematic_frequency
-from bearing_sim.fault_states import FaultState, parse_fault
+from bearing_common.bearings import CATALOG, fault_frequency as kinematic_frequency
+DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+from bearing_common.states import FaultState, parse_fault
 
 from .hw_model import HWModel
 from .impulse_trains import TWO_PI, impact_times, impulse_train

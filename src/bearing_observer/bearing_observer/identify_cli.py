@@ -9,9 +9,9 @@ Examples (each reproduces one shipped model set)::
                      --sample-rate 12000 --orders 6 6 0 --max-seconds 2 --model-set cwru_de_6205
 
 ``--source sim`` simulates each fault (``bearing_sim.simulator``, noise off, 1800 rpm by
-default) for ``--duration`` seconds. ``--source FILE.mat --fault F`` reads a CWRU-style
-file (g units; channel ``X<rec>_DE_time`` from the record number at the start of the file
-name, or ``--channel``; rpm from ``X<rec>RPM``). ``--order-search`` prints the fit per order
+default) for ``--duration`` seconds. ``--source FILE --fault F`` reads a recording of a
+known fault (any file ``bearing-diagnose`` reads: CWRU / MFPT / one-signal .mat, .npz,
+rosbag2; channel rule of ``bearing_recordings.mat_files``; rpm from the file or ``--rpm``). ``--order-search`` prints the fit per order
 and keeps the order with the best held-back fit. Model files go to
 ``--out DIR/<model-set>/<fault>.json`` (default: the package's ``models/`` directory).
 """
@@ -21,7 +21,6 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
-import re
 import shlex
 import sys
 import time
@@ -29,42 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
+from bearing_recordings.load import load_recording
+
 from .hw_model import FAULT_TYPES, MODELS_DIR
 from .identification import DEFAULT_ORDERS, N_AVERAGE_IR, identify_fault_model
-
-G0 = 9.80665  # m/s² per g (CWRU files are in g)
-
-
-def load_mat_record(path, channel: str | None = None, units: str = "g"):
-    """Drive-end signal (m/s²) and rpm from a CWRU-style .mat file.
-
-    Returns ``(y, rpm_or_None, channel_name)``. Raises ValueError with a clear message.
-    """
-    import scipy.io
-
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"no such file: {path}")
-    try:
-        d = scipy.io.loadmat(str(path))
-    except Exception as exc:  # scipy raises several types for bad files
-        raise ValueError(f"cannot read {path} as a MATLAB file: {exc}") from None
-    m = re.match(r"(\d+)", path.name)
-    if channel is None:
-        if not m:
-            raise ValueError(f"cannot infer the record number from {path.name}; give --channel")
-        channel = f"X{int(m.group(1)):03d}_DE_time"
-    if channel not in d:
-        keys = ", ".join(k for k in d if not k.startswith("__"))
-        raise ValueError(f"{path.name} has no variable {channel!r} (has: {keys})")
-    y = np.asarray(d[channel], dtype=float).ravel()
-    scale = {"g": G0, "m/s2": 1.0}[units]
-    rpm = None
-    rkey = channel.split("_")[0] + "RPM"
-    if rkey in d:
-        rpm = float(np.asarray(d[rkey]).ravel()[0])
-    return y * scale, rpm, channel
-
 
 def _sha256(path) -> str:
     h = hashlib.sha256()
@@ -75,7 +42,7 @@ def _sha256(path) -> str:
 
 
 def _simulate(fault: str, sample_rate: float, rpm: float, duration: float):
-    from bearing_sim.fault_states import parse_fault
+    from bearing_common.states import parse_fault
     from bearing_sim.simulator import SimulationConfig, simulate
 
     cfg = SimulationConfig(rpm=rpm, sample_rate=sample_rate, noise_density=0.0)
@@ -124,7 +91,7 @@ def main(argv=None) -> int:
     p.add_argument("--max-seconds", type=float, default=None,
                    help="use at most this many seconds of a recording")
     p.add_argument("--channel", default=None)
-    p.add_argument("--units", choices=("g", "m/s2"), default="g", help="units of a .mat file")
+    p.add_argument("--units", choices=("g", "m/s2"), default=None, help="units of a one-signal .mat file (default g)")
     p.add_argument("--model-set", required=True)
     p.add_argument("--out", default=str(MODELS_DIR), help="directory holding model sets")
     args = p.parse_args(argv)
@@ -140,21 +107,24 @@ def main(argv=None) -> int:
         try:
             if src == "sim":
                 rpm = args.rpm or 1800.0
-                y = _simulate(fault, args.sample_rate, rpm, args.duration)
+                fs = args.sample_rate
+                y = _simulate(fault, fs, rpm, args.duration)
                 prov = {"source": "simulator", "simulator": "bearing_sim.simulator (noise off)",
                         "rpm": rpm, "duration_s": args.duration}
             else:
-                y, rpm_file, channel = load_mat_record(src, args.channel, args.units)
-                rpm = args.rpm or rpm_file
+                rec = load_recording(src, sample_rate=args.sample_rate, rpm=args.rpm, channel=args.channel,
+                                     units=args.units)
+                y, rpm, fs = rec.accel, rec.rpm, rec.sample_rate
                 if rpm is None:
-                    raise ValueError(f"{src} holds no RPM variable; give --rpm")
+                    raise ValueError(f"{src} states no shaft speed; give --rpm")
                 if args.max_seconds:
-                    y = y[: int(args.max_seconds * args.sample_rate)]
-                prov = {"source": "recording", "file": Path(src).name, "sha256": _sha256(src),
-                        "channel": channel, "units_in_file": args.units,
+                    y = y[: int(args.max_seconds * fs)]
+                prov = {"source": "recording", "file": Path(src).name,
+                        "sha256": _sha256(src) if Path(src).is_file() else None,
+                        "channel": rec.channel, "units_in_file": args.units or "g",
                         "note": "derived model only; the recording itself is not part of the project"}
             prov["command"] = command
-            base = dict(sample_rate=args.sample_rate, rpm=rpm, fault=fault, mode=args.mode,
+            base = dict(sample_rate=fs, rpm=rpm, fault=fault, mode=args.mode,
                         n_average=args.n_average, refine_frequency=(src != "sim"))
             if args.order_search:
                 rows = []
@@ -172,7 +142,7 @@ def main(argv=None) -> int:
             else:
                 orders = tuple(args.orders) if args.orders else DEFAULT_ORDERS[fault]
                 result = identify_fault_model(y, orders=orders, provenance=dict(prov), **base)
-        except (ValueError, OSError) as exc:
+        except (ValueError, OSError) as exc:  # InputError is a ValueError
             print(f"bearing-identify: error ({fault}, {src}): {exc}", file=sys.stderr)
             return 1
         result.model.provenance["model_set"] = args.model_set

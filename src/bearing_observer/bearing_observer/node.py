@@ -14,21 +14,19 @@ import sys
 
 import numpy as np
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
+from bearing_common import topics
 from bearing_msgs.msg import Residual, ShaftSpeed, VibrationChunk
-from bearing_sim.fault_states import parse_fault
-from bearing_sim.node_main import run_node_main
-from bearing_sim.stamps import to_seconds
-from bearing_sim.ros_parameters import declare
+from bearing_common.states import parse_fault
+from bearing_common.node_main import run_node_main
+from bearing_common.stamps import to_seconds
+from bearing_common.parameters import declare
 
 from .chunk_stream import ChunkStream
 from .hw_model import ModelFileError, default_model_set
 from .kernels import warm_up
 from .observer import FaultObserver
-from .observer_node_config import PARAMETERS, TOPIC_INPUT, TOPIC_SPEED, default_node_name, residual_topic
-
-STREAM_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+from .observer_node_config import PARAMETERS, default_node_name
 WARN_PERIOD_S = 5.0
 
 
@@ -42,12 +40,13 @@ class ObserverNode(Node):
         self.rpm = float(self.values["rpm"])
         self.observer = None
         self.model_set = None
-        self.stream = ChunkStream(TOPIC_INPUT)
+        self.stream = ChunkStream(topics.VIBRATION.name)
         warm_up()  # compile or load the kernels now, not on the first chunks
-        self.pub = self.create_publisher(Residual, residual_topic(self.values["fault_type"]), STREAM_QOS)
-        self.create_subscription(VibrationChunk, TOPIC_INPUT, self.on_chunk, STREAM_QOS)
-        self.create_subscription(ShaftSpeed, TOPIC_SPEED, self.on_speed, QoSProfile(depth=10))
-        self.get_logger().info(f"{self.fault.label} observer: {TOPIC_INPUT} -> {self.pub.topic_name}")
+        out = topics.residual_topic(self.fault)
+        self.pub = self.create_publisher(Residual, out.name, topics.qos(out))
+        self.create_subscription(VibrationChunk, topics.VIBRATION.name, self.on_chunk, topics.qos(topics.VIBRATION))
+        self.create_subscription(ShaftSpeed, topics.SHAFT_SPEED.name, self.on_speed, topics.qos(topics.SHAFT_SPEED))
+        self.get_logger().info(f"{self.fault.label} observer: {topics.VIBRATION.name} -> {self.pub.topic_name}")
 
     def on_speed(self, msg: ShaftSpeed) -> None:
         rpm = msg.angular_velocity * 60.0 / (2.0 * math.pi)

@@ -68,8 +68,9 @@ import numpy as np
 from scipy import fft as sp_fft
 from scipy import linalg, signal
 
-from bearing_sim.bearing_geometry import DRIVE_END_6205, fault_frequency as kinematic_frequency
-from bearing_sim.fault_states import FaultState
+from bearing_common.bearings import CATALOG, fault_frequency as kinematic_frequency
+DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+from bearing_common.states import FaultState
 
 from .hw_model import HWModel, load_model_set
 from .impulse_trains import TWO_PI, impulse_train, modulated_train_components

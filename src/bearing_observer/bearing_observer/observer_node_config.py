@@ -1,7 +1,7 @@
 """Parameters and topics of the ``observer`` node (no rclpy)."""
 
-from bearing_sim.fault_states import FaultState, parse_fault
-from bearing_sim.ros_parameters import ParameterSpec, one_of, positive
+from bearing_common.states import FaultState, parse_fault
+from bearing_common.parameters import ParameterSpec, one_of, positive
 
 FAULT_TYPES = ("outer_race", "inner_race")
 
@@ -14,15 +14,6 @@ PARAMETERS = (
     ParameterSpec("speed_tolerance", 0.001, "relative shaft-speed change that re-tunes the impulse train",
                   positive),
 )
-
-TOPIC_INPUT = "vibration/drive_end"
-TOPIC_SPEED = "shaft_speed"
-
-
-def residual_topic(fault_type: str) -> str:
-    """``residual/outer_race`` or ``residual/inner_race``."""
-    return f"residual/{parse_fault(fault_type).label}"
-
 
 def default_node_name(argv) -> str:
     """``or_observer`` / ``ir_observer`` from a ``fault_type:=...`` among the command-line arguments."""

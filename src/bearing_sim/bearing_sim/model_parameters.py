@@ -15,7 +15,7 @@ Model variants (``ModelParameters.variant``), in the terms of
     ball/shaft mass couplings (1), fan-end shaft mass ``8*mo + ms/2`` (2), the
     ball rows of C without the ``-+ m*Omega`` terms that cancel in the
     Lagrangian (3). Bearing radii from the bearing geometry
-    (:mod:`bearing_geometry`).
+    (:mod:`bearing_common.bearings`, catalog entries ``6205`` and ``6203``).
 ``"listing"``
     Faithful to the listing, all four quirks kept, radii from the listing's
     defect-frequency ratios 3.5848 / 3.0530 (to reproduce the thesis).
@@ -34,15 +34,18 @@ import math
 
 import numpy as np
 
-from .bearing_geometry import DRIVE_END_6205, FAN_END_6203, INCH as _M_PER_INCH
+from bearing_common.bearings import CATALOG
+from bearing_common.units import INCH
+
+DRIVE_END = CATALOG["6205"]  #: the thesis' drive-end bearing (SKF 6205)
+FAN_END = CATALOG["6203"]  #: the thesis' fan-end bearing (SKF 6203)
 
 # --------------------------------------------------------------------------
 # SI conversion (the only place): listing units -> SI
 # --------------------------------------------------------------------------
-M_PER_INCH = _M_PER_INCH  #: 0.0254 m per inch (in/s^2 -> m/s^2 too)
+M_PER_INCH = INCH  #: 0.0254 m per inch (in/s^2 -> m/s^2 too)
 N_PER_LBF = 4.4482216152605  #: newton per pound-force
 G_IN_PER_S2 = 386.4  #: listing's g (in/s^2); mass [lbf s^2/in] = lbm / 386.4
-STANDARD_G = 9.80665  #: m/s^2, for quoting levels in g
 
 VARIANTS = ("default", "listing", "lagrangian_housing")
 
@@ -138,15 +141,15 @@ class ModelParameters:
                         ("ir_defect_width", ir_defect_width), ("ir_defect_depth", ir_defect_depth)):
             if not (math.isfinite(v) and 0.0 <= v < 0.05):
                 raise ValueError(f"{name} must be in [0, 0.05) inch, got {v!r}")
-        rho1 = DRIVE_END_6205.ball_diameter / M_PER_INCH / 2.0  # ball radius (listing says "diameter")
-        rho2 = FAN_END_6203.ball_diameter / M_PER_INCH / 2.0
+        rho1 = DRIVE_END.element_diameter / M_PER_INCH / 2.0  # ball radius (listing says "diameter")
+        rho2 = FAN_END.element_diameter / M_PER_INCH / 2.0
         if variant == "listing":
             # r = 2*odf*rho/(n - 2*odf): inner-race radius from the BPFO ratio
             r1 = 2 * BPFO_RATIO_DE_LISTING * rho1 / (N_BALLS_DE - 2 * BPFO_RATIO_DE_LISTING)
             r2 = 2 * BPFO_RATIO_FE_LISTING * rho2 / (N_BALLS_FE - 2 * BPFO_RATIO_FE_LISTING)
         else:  # pitch radius minus ball radius, from the bearing geometry
-            r1 = DRIVE_END_6205.pitch_diameter / M_PER_INCH / 2.0 - rho1
-            r2 = FAN_END_6203.pitch_diameter / M_PER_INCH / 2.0 - rho2
+            r1 = DRIVE_END.pitch_diameter / M_PER_INCH / 2.0 - rho1
+            r2 = FAN_END.pitch_diameter / M_PER_INCH / 2.0 - rho2
         R1 = r1 + 2 * rho1 - RADIAL_INTERFERENCE_DE
         R2 = r2 + 2 * rho2 - RADIAL_INTERFERENCE_FE
         return cls(variant, float(rpm), or_defect_width, or_defect_depth, ir_defect_width,

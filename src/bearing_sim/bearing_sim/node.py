@@ -13,25 +13,21 @@ import time
 
 import rclpy
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
+from bearing_common import topics
 from bearing_msgs.msg import FaultState as FaultStateMsg, ShaftSpeed, VibrationChunk
 
-from .fault_states import FaultState
-from .node_main import run_node_main
-from .stamps import to_stamp
-from .ros_parameters import declare
-from .sim_node_config import (PARAMETERS, SOURCE, TOPIC_SHAFT_SPEED, TOPIC_TRUTH, TOPIC_UNBALANCE,
-                              TOPIC_VIBRATION, build_run, parse_wait_spec)
+from bearing_common.states import FaultState
+from bearing_common.node_main import run_node_main
+from bearing_common.stamps import to_stamp
+from bearing_common.parameters import declare
+from .sim_node_config import PARAMETERS, SOURCE, build_run, parse_wait_spec
 from .simulator import Simulator
 
 ENDLESS_SEGMENT_S = 3600.0  # normal operation without a schedule: hour-long segments, repeated
 RTF_LOG_PERIOD_S = 5.0  # wall seconds between real-time-factor log lines
 
-STREAM_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
-TRUTH_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
-                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class SimulatorNode(Node):
@@ -43,11 +39,11 @@ class SimulatorNode(Node):
         self.run = build_run(self.values)
         self.repeat = bool(self.values["repeat"]) or self.run.schedule is None
         self.schedule = self.run.schedule or [(FaultState.NORMAL, ENDLESS_SEGMENT_S)]
-        self.pub_vib = self.create_publisher(VibrationChunk, TOPIC_VIBRATION, STREAM_QOS)
-        self.pub_unb = self.create_publisher(VibrationChunk, TOPIC_UNBALANCE, STREAM_QOS)
-        self.pub_speed = self.create_publisher(ShaftSpeed, TOPIC_SHAFT_SPEED, QoSProfile(depth=10))
-        self.pub_truth = self.create_publisher(FaultStateMsg, TOPIC_TRUTH, TRUTH_QOS)
-        self.pub_clock = self.create_publisher(Clock, "/clock", QoSProfile(depth=10)) \
+        self.pub_vib = self.create_publisher(VibrationChunk, topics.VIBRATION.name, topics.qos(topics.VIBRATION))
+        self.pub_unb = self.create_publisher(VibrationChunk, topics.UNBALANCE.name, topics.qos(topics.UNBALANCE))
+        self.pub_speed = self.create_publisher(ShaftSpeed, topics.SHAFT_SPEED.name, topics.qos(topics.SHAFT_SPEED))
+        self.pub_truth = self.create_publisher(FaultStateMsg, topics.TRUTH.name, topics.qos(topics.TRUTH))
+        self.pub_clock = self.create_publisher(Clock, topics.CLOCK.name, topics.qos(topics.CLOCK)) \
             if self.values["publish_clock"] else None
         self.omega = self.run.config.rpm * 2.0 * math.pi / 60.0
         self.fs = self.run.config.sample_rate

@@ -6,7 +6,7 @@ fault starts at the start of its segment.
 
 import math
 
-from .fault_states import FaultState, parse_fault
+from bearing_common.states import FaultState, parse_fault
 
 DEFAULT_SEGMENT_DURATION = 0.2  #: s, per scenario segment (CONTRACT.md)
 

@@ -1,13 +1,13 @@
 """Parameters of the ``simulator`` node and how they become a simulation (no rclpy).
 
 The node (``node.py``) declares ``PARAMETERS``; ``build_run`` turns their values
-into a validated SimulationConfig and schedule. Topic names and QoS depths are
-the contract's (../shared/CONTRACT.md).
+into a validated SimulationConfig and schedule. Topic names and QoS come from
+:mod:`bearing_common.topics`.
 """
 
 from dataclasses import dataclass
 
-from .ros_parameters import ParameterSpec, positive
+from bearing_common.parameters import ParameterSpec, positive
 from .schedule import parse_schedule, scenario
 from .simulator import SimulationConfig
 
@@ -28,7 +28,7 @@ PARAMETERS = (
     ParameterSpec("publish_clock", False, "publish /clock with the simulation time (for use_sim_time consumers)"),
     ParameterSpec("frame_id", "drive_end", "frame_id of vibration/drive_end (sensor location)"),
     ParameterSpec("wait_for_subscribers", "", "before publishing, wait until these topics have these many "
-                  "subscribers, 'topic:count,...' e.g. 'vibration/drive_end:2,residual/outer_race:1' (the graph's "
+                  "subscribers, 'topic:count,...' e.g. 'vibration/drive_end:2' (the graph's "
                   "consumers are ready), at most subscriber_timeout s; empty = start at once",
                   lambda v: _check_wait_spec(v)),
     ParameterSpec("subscriber_timeout", 30.0, "seconds to wait for subscribers before starting anyway", positive),
@@ -54,10 +54,6 @@ def _check_wait_spec(spec: str):
     return None
 
 
-TOPIC_VIBRATION = "vibration/drive_end"
-TOPIC_UNBALANCE = "unbalance"
-TOPIC_SHAFT_SPEED = "shaft_speed"
-TOPIC_TRUTH = "sim/truth"
 SOURCE = "simulator"
 
 

@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from .defects import inner_race_window, outer_race_window
-from .fault_states import FaultState
+from bearing_common.states import FaultState
 from .integrator import STAT_REJECTS, STAT_RHS, STAT_STEPS, default_atol, integrate_interval
 from .model_parameters import (
     DEFECT_DEPTH, DEFECT_WIDTH, M_PER_INCH, N_BALLS_DE, N_PER_LBF, VARIANTS, ModelParameters,

@@ -14,9 +14,9 @@ import time
 
 import numpy as np
 
-from .graph import GRAPH, config_path
-from .graph_cli import installed_executable
-from .process_group import ProcessGroup
+from bearing_bringup.graph import GRAPH, config_path
+from bearing_bringup.graph_cli import installed_executable
+from bearing_bringup.process_group import ProcessGroup
 
 SCENARIO = "or-ir"
 SEGMENT_S = 1.0
@@ -25,8 +25,7 @@ SEGMENT_S = 1.0
 def bench_end_to_end_latency():
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
-
+    from bearing_common import topics
     from bearing_msgs.msg import FaultState, VibrationChunk
 
     domain = 200 + os.getpid() % 30
@@ -52,9 +51,8 @@ def bench_end_to_end_latency():
             if i < len(chunk_ends):
                 latencies.append(arrived - chunk_wall[i])
 
-    qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-    node.create_subscription(VibrationChunk, "vibration/drive_end", on_chunk, qos)
-    node.create_subscription(FaultState, "fault_state", on_state, qos)
+    node.create_subscription(VibrationChunk, topics.VIBRATION.name, on_chunk, topics.qos(topics.VIBRATION, depth=100))
+    node.create_subscription(FaultState, topics.FAULT_STATE.name, on_state, topics.qos(topics.FAULT_STATE, depth=100))
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     group = ProcessGroup(env=env, echo=False)

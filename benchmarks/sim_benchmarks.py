@@ -22,8 +22,8 @@ import tracemalloc
 
 import numpy as np
 
-from .fault_states import FaultState
-from .simulator import SimulationConfig, Simulator
+from bearing_common.states import FaultState
+from bearing_sim.simulator import SimulationConfig, Simulator
 
 CASES = (("normal", FaultState.NORMAL), ("or", FaultState.OUTER_RACE), ("ir", FaultState.INNER_RACE))
 
@@ -47,8 +47,8 @@ def first_call_time():
 def rhs_cost_us(n=200000):
     """Mean cost of one compiled right-hand-side evaluation (us) near equilibrium."""
     from numba import njit
-    from .model_parameters import ModelParameters
-    from .rotor_rhs import NSTATE, WORK_LEN, make_rhs_args, rhs, static_equilibrium
+    from bearing_sim.model_parameters import ModelParameters
+    from bearing_sim.rotor_rhs import NSTATE, WORK_LEN, make_rhs_args, rhs, static_equilibrium
 
     params = ModelParameters.create()
     p, ct0, st0 = make_rhs_args(params)

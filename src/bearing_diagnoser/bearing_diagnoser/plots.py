@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bearing_sim.fault_states import FaultState
+from bearing_common.states import FaultState
 
 from .periodicity import train_autocorrelation, train_cross_correlation
 

@@ -16,6 +16,8 @@ import sys
 import time
 import traceback
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))  # `benchmarks` as a package
+
 # Per-core figures: one BLAS thread (numpy would otherwise spread small solves over both
 # cores, and process CPU time would count them twice). Set before the benchmark modules
 # import numpy (they are imported in main()).
@@ -23,11 +25,11 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 MODULES = (
-    "bearing_sim.sim_benchmarks",
-    "bearing_observer.obs_benchmarks",
-    "bearing_diagnoser.diag_benchmarks",
-    "bearing_bringup.bag_benchmarks",
-    "bearing_bringup.graph_benchmarks",
+    "benchmarks.sim_benchmarks",
+    "benchmarks.obs_benchmarks",
+    "benchmarks.diag_benchmarks",
+    "benchmarks.bag_benchmarks",
+    "benchmarks.graph_benchmarks",
 )
 
 

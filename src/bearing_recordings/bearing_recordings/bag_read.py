@@ -4,128 +4,33 @@ A bag is a rosbag2 directory (``metadata.yaml`` plus MCAP or sqlite3 storage) as
 by ``ros2 bag record`` or ``bearing-bag record`` / ``bearing-bag from-mat``.  Messages are
 decoded with the definitions embedded in the bag itself (ros2msg / ros2idl text, checked
 against the recorded RIHS01 type hashes); bags without embedded definitions fall back to
-the ROS 2 Kilted standard types plus this project's ``bearing_msgs`` definitions.
+:func:`.bag_types.project_typestore`.
 
 The graph's topics are relative names; in a bag they appear fully qualified, e.g.
 ``/vibration/drive_end`` or ``/machine_3/vibration/drive_end``.  :func:`read_bag` finds a
 topic by its relative name under one namespace (``namespace=None``: the only one present).
 
-Everything here is also what ``bearing-bag`` (package ``bearing_bringup``) builds on:
-the topic table :data:`GRAPH_TOPICS`, the type store with ``bearing_msgs``
-(:func:`project_typestore`) and bag validation (:func:`open_bag`).
-
-Errors are :class:`BagError` (an :class:`~.signal_files.InputError`) with one line meant
+Errors are :class:`BagError` (an :class:`~.recording.InputError`) with one line meant
 for the user.
 """
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from functools import lru_cache
+import logging
 from pathlib import Path
-import sys
-from typing import Iterator, NamedTuple, Optional
+from typing import Iterator, Optional
 
 import numpy as np
 
-from bearing_sim.stamps import to_seconds
+from bearing_common import topics
+from bearing_common.stamps import to_seconds
 
-from .signal_files import InputError, Recording
+from .bag_types import BagError, CUSTOM_BEARING, CUSTOM_NAMESPACE, project_typestore
+from .recording import Recording
 
-#: Interface package of the project; its .msg files give the definitions.
-MSG_PACKAGE = "bearing_msgs"
-
-
-class TopicSpec(NamedTuple):
-    """A topic of the monitoring graph (``CONTRACT.md``, "Topics")."""
-
-    name: str  # relative name ("/diagnostics" is absolute)
-    msgtype: str  # rosbag2 type name, e.g. bearing_msgs/msg/VibrationChunk
-    latched: bool  # reliable + transient local (a late subscriber gets the current value)
-    depth: int  # keep-last depth
-
-
-#: The graph's topics with their types and QoS, in the order ``bearing-bag record`` lists them.
-GRAPH_TOPICS = OrderedDict((t.name, t) for t in (
-    TopicSpec("vibration/drive_end", "bearing_msgs/msg/VibrationChunk", False, 50),
-    TopicSpec("unbalance", "bearing_msgs/msg/VibrationChunk", False, 50),
-    TopicSpec("shaft_speed", "bearing_msgs/msg/ShaftSpeed", False, 10),
-    TopicSpec("sim/truth", "bearing_msgs/msg/FaultState", True, 10),
-    TopicSpec("residual/outer_race", "bearing_msgs/msg/Residual", False, 50),
-    TopicSpec("residual/inner_race", "bearing_msgs/msg/Residual", False, 50),
-    TopicSpec("fault_state", "bearing_msgs/msg/FaultState", True, 10),
-    TopicSpec("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", False, 10),
-))
-
-#: Recorded by default (``/diagnostics`` is for humans; add it with ``--topics`` if wanted).
-DEFAULT_RECORD_TOPICS = tuple(n for n in GRAPH_TOPICS if n != "/diagnostics")
-
-#: Topics :func:`read_bag` decodes.
-TOPIC_VIBRATION = "vibration/drive_end"
-TOPIC_SPEED = "shaft_speed"
-TOPIC_FAULT_STATE = "fault_state"
-TOPIC_TRUTH = "sim/truth"
-
-#: Key in the bag's ``custom_data`` holding the namespace the graph ran in.
-CUSTOM_NAMESPACE = "bearing_bag.namespace"
-
-
-class BagError(InputError):
-    """The path is not a readable rosbag2 recording of the graph (one-line message)."""
-
-
-# ----------------------------------------------------------------------------------------
-# Type store
-
-
-def msg_definition_dirs() -> list:
-    """Directories holding ``bearing_msgs/msg/*.msg``: the installed package's share
-    directory (found beside the importable ``bearing_msgs`` Python package), else the
-    repository's ``msgs/msg``."""
-    dirs = []
-    try:
-        import bearing_msgs  # the generated Python package: .../install/bearing_msgs/lib/python3.11/site-packages
-        pkg = Path(bearing_msgs.__file__).resolve().parent
-        for up in pkg.parents:
-            share = up / "share" / MSG_PACKAGE / "msg"
-            if share.is_dir():
-                dirs.append(share)
-                break
-    except ImportError:
-        pass
-    source = Path(__file__).resolve().parents[3] / "msgs" / "msg"
-    if source.is_dir():
-        dirs.append(source)
-    return dirs
-
-
-@lru_cache(maxsize=1)
-def _project_typedefs() -> dict:
-    from rosbags.typesys import get_types_from_msg
-    for d in msg_definition_dirs():
-        files = sorted(d.glob("*.msg"))
-        if files:
-            typs = {}
-            for f in files:
-                typs.update(get_types_from_msg(f.read_text(), f"{MSG_PACKAGE}/msg/{f.stem}"))
-            return typs
-    raise BagError(f"cannot find the {MSG_PACKAGE} .msg definitions (looked in: "
-                   f"{', '.join(map(str, msg_definition_dirs())) or 'nowhere'}); build ros_ws first")
-
-
-def project_typestore():
-    """A fresh ``rosbags`` type store: ROS 2 Kilted standard types + ``bearing_msgs``.
-
-    ``store.generate_msgdef(t, ros_version=2)`` gives the full ros2msg definition text
-    (with dependencies such as std_msgs/Header) and ``store.hash_rihs01(t)`` the same type
-    hash ROS 2 computes, so bags written with it decode in other tools.
-    """
-    from rosbags.typesys import Stores, get_typestore
-    store = get_typestore(Stores.ROS2_KILTED)
-    store.register(_project_typedefs())
-    return store
+LOG = logging.getLogger(__name__)
 
 
 # ----------------------------------------------------------------------------------------
@@ -207,23 +112,16 @@ def iter_raw(reader, connections) -> Iterator[tuple]:
                        f"({exc.__class__.__name__}: {_one_line(exc)})") from None
 
 
-def _qualified(namespace: str, relative: str) -> str:
-    if relative.startswith("/"):
-        return relative
-    ns = namespace.strip("/")
-    return f"/{ns}/{relative}" if ns else f"/{relative}"
-
-
-def find_topic(topics, relative: str, namespace: Optional[str] = None) -> Optional[str]:
-    """The recorded name of graph topic ``relative`` among ``topics`` (None if absent).
+def find_topic(recorded, relative: str, namespace: Optional[str] = None) -> Optional[str]:
+    """The recorded name of graph topic ``relative`` among ``recorded`` names (None if absent).
 
     With ``namespace`` (e.g. ``"machine_3"`` or ``""`` for the root) the name must be
     exactly ``/namespace/relative``; without, any namespace is accepted as long as only one
     recorded topic matches.
     """
-    names = list(topics)
+    names = list(recorded)
     if namespace is not None:
-        want = _qualified(namespace, relative)
+        want = topics.qualified(namespace, relative)
         return want if want in names else None
     rel = relative.strip("/")
     matches = [n for n in names if n.strip("/") == rel or n.endswith("/" + rel)]
@@ -303,35 +201,39 @@ def _state_sample(msg, log_time: float) -> StateSample:
                        to_seconds(msg.onset), scores, str(msg.model_set), str(msg.detail), log_time)
 
 
+def _bag_info(path) -> dict:
+    """``rosbag2_bagfile_information`` of ``metadata.yaml`` ({} when unreadable)."""
+    import yaml
+    try:
+        meta = yaml.safe_load((Path(path) / "metadata.yaml").read_text())
+        info = meta.get("rosbag2_bagfile_information") if isinstance(meta, dict) else None
+        return info if isinstance(info, dict) else {}
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return {}
+
+
 def bag_storage(path) -> str:
     """The storage identifier in ``metadata.yaml`` (``mcap``, ``sqlite3``), or ``""``."""
-    try:
-        from ruamel.yaml import YAML
-        meta = YAML(typ="safe").load((Path(path) / "metadata.yaml").read_text())
-        return str(meta["rosbag2_bagfile_information"].get("storage_identifier", ""))
-    except Exception:
-        return ""
+    return str(_bag_info(path).get("storage_identifier", ""))
+
+
+def _custom(path, key: str) -> Optional[str]:
+    custom = _bag_info(path).get("custom_data") or {}
+    value = custom.get(key) if isinstance(custom, dict) else None
+    return None if value is None else str(value)
 
 
 def bag_namespace_hint(path) -> Optional[str]:
     """The namespace ``bearing-bag`` stored in the bag's custom_data, if any."""
-    try:
-        from ruamel.yaml import YAML
-        meta = YAML(typ="safe").load((Path(path) / "metadata.yaml").read_text())
-        custom = meta["rosbag2_bagfile_information"].get("custom_data") or {}
-        ns = custom.get(CUSTOM_NAMESPACE)
-        return None if ns is None else str(ns)
-    except Exception:
-        return None
+    return _custom(path, CUSTOM_NAMESPACE)
 
 
-EXPECTED_TYPES = {TOPIC_VIBRATION: "bearing_msgs/msg/VibrationChunk",
-                  TOPIC_SPEED: "bearing_msgs/msg/ShaftSpeed",
-                  TOPIC_FAULT_STATE: "bearing_msgs/msg/FaultState",
-                  TOPIC_TRUTH: "bearing_msgs/msg/FaultState"}
+def bag_bearing(path) -> str:
+    """The bearing ``bearing-bag from-mat`` stored in the bag's custom_data, else ""."""
+    return _custom(path, CUSTOM_BEARING) or ""
 
 
-def read_bag(path, namespace: Optional[str] = None, vibration_topic: str = TOPIC_VIBRATION) -> BagContents:
+def read_bag(path, namespace: Optional[str] = None, vibration_topic: str = topics.VIBRATION.name) -> BagContents:
     """Decode the graph's recorded vibration, shaft speed and fault states.
 
     Parameters
@@ -354,8 +256,8 @@ def read_bag(path, namespace: Optional[str] = None, vibration_topic: str = TOPIC
     BagError
         Not a bag, truncated or damaged, no vibration topic, or a topic of the wrong type.
     """
-    wanted = {vibration_topic: EXPECTED_TYPES[TOPIC_VIBRATION], TOPIC_SPEED: EXPECTED_TYPES[TOPIC_SPEED],
-              TOPIC_FAULT_STATE: EXPECTED_TYPES[TOPIC_FAULT_STATE], TOPIC_TRUTH: EXPECTED_TYPES[TOPIC_TRUTH]}
+    wanted = {vibration_topic: topics.VIBRATION.msgtype, topics.SHAFT_SPEED.name: topics.SHAFT_SPEED.msgtype,
+              topics.FAULT_STATE.name: topics.FAULT_STATE.msgtype, topics.TRUTH.name: topics.TRUTH.msgtype}
     with open_bag(path) as reader:
         recorded = {c.topic: c.msgtype for c in reader.connections}
         counts: dict = {}
@@ -392,10 +294,10 @@ def read_bag(path, namespace: Optional[str] = None, vibration_topic: str = TOPIC
                 out.chunks.append(Chunk(to_seconds(msg.header.stamp), int(msg.first_sample_index),
                                         float(msg.sample_rate), str(msg.source), str(msg.header.frame_id),
                                         np.asarray(msg.samples, dtype=float), log_time))
-            elif rel == TOPIC_SPEED:
+            elif rel == topics.SHAFT_SPEED.name:
                 out.speeds.append(SpeedSample(to_seconds(msg.header.stamp), float(msg.angular_velocity),
                                               str(msg.source), log_time))
-            elif rel == TOPIC_FAULT_STATE:
+            elif rel == topics.FAULT_STATE.name:
                 out.fault_states.append(_state_sample(msg, log_time))
             else:
                 out.truth.append(_state_sample(msg, log_time))
@@ -468,26 +370,25 @@ def truth_per_sample(truth: list, start_time: float, n: int, rate: float) -> Opt
 
 
 def load_bag(path, channel: Optional[str] = None, namespace: Optional[str] = None) -> Recording:
-    """A rosbag2 recording of the graph as a :class:`~.signal_files.Recording` (the hook of
-    ``signal_files.load_bag`` / ``bearing-diagnose BAG_DIR``).
+    """A rosbag2 recording of the graph as a :class:`~.recording.Recording` (``bearing-diagnose BAG_DIR``).
 
     ``channel`` is the relative VibrationChunk topic (default ``vibration/drive_end``).
-    The chunks are joined by ``first_sample_index`` (gaps zero-filled, reported on
-    stderr); ``source`` is the chunks' source field (picks the model set), ``rpm`` the
+    The chunks are joined by ``first_sample_index`` (gaps zero-filled, logged as a
+    warning); ``source`` is the chunks' source field (picks the model set), ``rpm`` the
     median of ``shaft_speed``, ``truth`` per sample from ``sim/truth`` when recorded.
-    The stamp of the first sample is kept as ``recording.start_time`` (s).
+    The stamp of the first sample is kept as ``recording.start_time`` (s), the bearing
+    stored by ``bearing-bag from-mat`` as ``recording.bearing``.
     """
-    contents = read_bag(path, namespace=namespace, vibration_topic=channel or TOPIC_VIBRATION)
+    contents = read_bag(path, namespace=namespace, vibration_topic=channel or topics.VIBRATION.name)
     try:
         stream = join_chunks(contents.chunks)
     except BagError as exc:
         raise BagError(f"{path}: {exc}") from None
     if stream.gaps:
         missing = sum(n for _i, n in stream.gaps)
-        print(f"bearing-diagnose: {path}: {len(stream.gaps)} gaps in vibration/drive_end "
-              f"({missing} samples, {missing / stream.sample_rate:.3f} s) filled with zeros", file=sys.stderr)
+        LOG.warning("%s: %d gaps in %s (%d samples, %.3f s) filled with zeros", path, len(stream.gaps),
+                    channel or topics.VIBRATION.name, missing, missing / stream.sample_rate)
     truth = truth_per_sample(contents.truth, stream.start_time, stream.samples.size, stream.sample_rate)
-    rec = Recording(stream.samples, stream.sample_rate, contents.rpm, stream.source, truth,
-                    channel or TOPIC_VIBRATION, str(path))
-    rec.start_time = stream.start_time
-    return rec
+    return Recording(stream.samples, stream.sample_rate, contents.rpm, stream.source, truth,
+                     channel or topics.VIBRATION.name, str(path), start_time=stream.start_time,
+                     bearing=bag_bearing(path))

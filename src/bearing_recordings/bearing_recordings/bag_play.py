@@ -17,11 +17,12 @@ import sys
 import time
 from typing import Callable, Optional
 
-from bearing_diagnoser.bag_files import (GRAPH_TOPICS, BagError, bag_namespace_hint, find_topic, iter_raw,
-                                         open_bag)
+from bearing_common import topics
 
-from .bag_record import _StopFlag, message_class, rclpy_qos
-from .bag_write import qualify
+from .bag_read import bag_namespace_hint, find_topic, iter_raw, open_bag
+from .bag_record import message_class
+from .bag_types import BagError
+from .stop_signals import StopSignals
 
 #: Wall-clock period (s) of /clock messages while waiting between recorded messages.
 CLOCK_PERIOD = 0.025
@@ -42,25 +43,25 @@ def _relative(name: str, namespace: str) -> str:
     return name[len(prefix):] if name.startswith(prefix) else name
 
 
-def _recorded_qos(conn):
-    """(latched, depth) from a connection's offered QoS in the bag's metadata."""
+def _recorded_topic(conn, name: str) -> topics.Topic:
+    """A topic outside the graph's table, with the QoS it was offered with (bag metadata)."""
     try:
         from rosbags.interfaces import QosDurability
         profiles = conn.ext.offered_qos_profiles
         latched = any(q.durability == QosDurability.TRANSIENT_LOCAL for q in profiles)
         depth = max([q.depth for q in profiles] + [10])
-        return latched, depth
     except AttributeError:
-        return False, 10
+        latched, depth = False, 10
+    return topics.Topic(name, conn.msgtype, depth, latched)
 
 
-def select_connections(reader, topics=None, namespace=None) -> list:
-    """The bag's connections to play: all, or those of ``topics`` (relative or absolute names)."""
-    if not topics:
+def select_connections(reader, names=None, namespace=None) -> list:
+    """The bag's connections to play: all, or those of ``names`` (relative or absolute)."""
+    if not names:
         return list(reader.connections)
     recorded = {c.topic for c in reader.connections}
     chosen = set()
-    for t in topics:
+    for t in names:
         name = find_topic(recorded, t, namespace)
         if name is None:
             raise BagError(f"topic {t!r} is not in the bag (it has {', '.join(sorted(recorded))})")
@@ -68,7 +69,7 @@ def select_connections(reader, topics=None, namespace=None) -> list:
     return [c for c in reader.connections if c.topic in chosen]
 
 
-def play(bag_dir, rate: float = 1.0, clock: bool = False, topics=None, loop: bool = False,
+def play(bag_dir, rate: float = 1.0, clock: bool = False, names=None, loop: bool = False,
          delay: float = 1.0, namespace: Optional[str] = None, wait_for_subscribers: int = 0,
          log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)) -> dict:
     """Publish the recording; return the number of messages published per topic.
@@ -87,8 +88,8 @@ def play(bag_dir, rate: float = 1.0, clock: bool = False, topics=None, loop: boo
     if not (rate > 0):
         raise BagError(f"rate must be positive, got {rate:g}")
     counts: dict = {}
-    with open_bag(bag_dir) as reader, _StopFlag() as stop:
-        conns = select_connections(reader, topics)
+    with open_bag(bag_dir) as reader, StopSignals() as stop:
+        conns = select_connections(reader, names)
         if not conns:
             raise BagError(f"{bag_dir}: nothing to play (the bag has no messages)")
         recorded_ns = bag_namespace_hint(bag_dir) or ""
@@ -101,19 +102,19 @@ def play(bag_dir, rate: float = 1.0, clock: bool = False, topics=None, loop: boo
             pubs, out_names = {}, {}
             for conn in conns:
                 rel = _relative(conn.topic, recorded_ns)
-                spec = GRAPH_TOPICS.get(rel)
-                out = qualify(namespace, rel) if namespace is not None else conn.topic
+                spec = topics.GRAPH_TOPICS.get(rel)
+                out = topics.qualified(namespace, rel) if namespace is not None else conn.topic
                 if conn.topic in pubs:
                     continue
-                latched, depth = (spec.latched, spec.depth) if spec is not None else _recorded_qos(conn)
+                spec = spec or _recorded_topic(conn, out)
                 pubs[conn.topic] = node.create_publisher(message_class(conn.msgtype), out,
-                                                         rclpy_qos(latched, max(depth, PLAY_DEPTH)))
+                                                         topics.qos(spec, depth=max(spec.depth, PLAY_DEPTH)))
                 out_names[conn.topic] = out
                 counts[out] = 0
             clock_pub = None
             if clock:
                 from rosgraph_msgs.msg import Clock
-                clock_pub = node.create_publisher(Clock, "/clock", 10)
+                clock_pub = node.create_publisher(Clock, topics.CLOCK.name, topics.CLOCK.depth)
 
             def publish_clock(t_ns: int):
                 if clock_pub is not None:

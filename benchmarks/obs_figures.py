@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .hw_model import load_model_set
-from .impulse_trains import impulse_train
-from .observer import FaultObserver
+from bearing_observer.hw_model import load_model_set
+from bearing_observer.impulse_trains import impulse_train
+from bearing_observer.observer import FaultObserver
 
 
 def _plt():

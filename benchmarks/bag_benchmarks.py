@@ -1,7 +1,7 @@
 """Benchmarks of the bag tools: rows of (figure, value, unit) for ``make bench``.
 
 * :func:`bench_bag_throughput` — writing (``bearing-bag`` writer, rosbags) and reading
-  (``bearing_diagnoser.bag_files.read_bag``) 48 kHz vibration bags, MCAP and sqlite3:
+  (``bearing_recordings.bag_read.read_bag``) 48 kHz vibration bags, MCAP and sqlite3:
   messages/s and MB/s of CDR payload.
 * :func:`bench_bag_diagnose_speed` — ``bearing-diagnose BAG_DIR`` (load + offline
   pipeline, in process) on a simulator OR-IR bag and, when the CWRU recordings are
@@ -31,8 +31,8 @@ def _payload_bytes(bag_dir: pathlib.Path) -> int:
 
 def bench_bag_throughput(seconds: float = THROUGHPUT_SECONDS, rate: float = THROUGHPUT_RATE) -> list:
     """Write and read back a vibration bag; rows per storage."""
-    from bearing_diagnoser.bag_files import read_bag
-    from .bag_write import write_signal_bag
+    from bearing_recordings.bag_read import read_bag
+    from bearing_recordings.bag_write import write_signal_bag
     rng = np.random.default_rng(0)
     x = rng.standard_normal(int(seconds * rate))
     rows = []
@@ -67,7 +67,7 @@ def _cwru_105() -> pathlib.Path | None:
 
 def _diagnose_speed(bag: pathlib.Path, label: str) -> list:
     from bearing_diagnoser.offline import diagnose_recording
-    from bearing_diagnoser.signal_files import load_recording
+    from bearing_recordings.load import load_recording
     t0 = time.perf_counter()
     rec = load_recording(bag)
     t_load = time.perf_counter() - t0
@@ -80,11 +80,12 @@ def _diagnose_speed(bag: pathlib.Path, label: str) -> list:
 
 def bench_bag_diagnose_speed() -> list:
     """Replay speed of the offline pipeline on bags, as a multiple of real time."""
-    from .bag_write import mat_to_bag, write_signal_bag
+    from bearing_recordings.bag_write import recording_to_bag, write_signal_bag
+    from bearing_recordings.mat_files import load_mat
     rows = []
     with tempfile.TemporaryDirectory(prefix="bag_bench_") as tmp:
         try:
-            from bearing_diagnoser.diag_benchmarks import simulate_case
+            from .evaluation import simulate_case
             rec = simulate_case("or-ir", segment_s=1.0)
             sim_bag = pathlib.Path(tmp) / "sim"
             write_signal_bag(sim_bag, rec.accel, rec.sample_rate, rec.rpm, "simulator")
@@ -94,7 +95,7 @@ def bench_bag_diagnose_speed() -> list:
         mat = _cwru_105()
         if mat is not None:
             cwru_bag = pathlib.Path(tmp) / "cwru"
-            mat_to_bag(mat, cwru_bag, 12000.0)
+            recording_to_bag(load_mat(mat, 12000.0), cwru_bag)
             rows += _diagnose_speed(cwru_bag, "CWRU 105 IR, 12 kHz")
     return rows
 

@@ -5,8 +5,9 @@ for machines without ``ros2 bag`` (the PyPI ROS 2 wheels do not include rosbag2)
     bearing-bag play BAG_DIR [--rate R] [--clock] [--topics T ...] [--loop] [--delay S]
                      [--wait-for-subscribers [N]] [--namespace NS]
     bearing-bag info BAG_DIR
-    bearing-bag from-mat FILE.mat --sample-rate HZ [--channel X105_DE_time] [--rpm RPM]
-                         [--chunk-duration 0.01] [--start-time 0] [--duration S] --out BAG_DIR
+    bearing-bag from-mat FILE.mat [--sample-rate HZ] [--channel NAME] [--rpm RPM] [--bearing NAME|FILE.yaml]
+                         [--units g|m/s2] [--chunk-duration 0.01] [--start-time 0] [--duration S]
+                         [--resample HZ] --out BAG_DIR
 
 Bags are ordinary rosbag2 directories (MCAP by default) with the message definitions
 embedded: ``ros2 bag info/play`` of a full ROS 2 install and ``bearing-diagnose BAG_DIR``
@@ -23,7 +24,7 @@ EXIT_BAD_INPUT = 2
 
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``bearing-bag``."""
-    from bearing_diagnoser.bag_files import DEFAULT_RECORD_TOPICS
+    from .bag_record import DEFAULT_RECORD_TOPICS
     p = argparse.ArgumentParser(prog="bearing-bag", description="Record, replay and inspect rosbag2 "
                                 "recordings of the bearing-monitoring graph (no ros2 CLI needed).")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -51,12 +52,16 @@ def build_parser() -> argparse.ArgumentParser:
     i = sub.add_parser("info", help="topics, types, message counts, duration, storage")
     i.add_argument("bag", metavar="BAG_DIR")
 
-    m = sub.add_parser("from-mat", help="convert a CWRU-style .mat recording into a bag")
+    m = sub.add_parser("from-mat", help="convert a MATLAB recording (CWRU, MFPT, one signal) into a bag")
     m.add_argument("mat", metavar="FILE.mat")
-    m.add_argument("--channel", help="variable, e.g. X105_DE_time (default: the record's drive end)")
-    m.add_argument("--sample-rate", type=float, required=True, metavar="HZ",
-                   help="sample rate (Hz); the files do not store it (CWRU: 12000 or 48000)")
-    m.add_argument("--rpm", type=float, help="shaft speed (rev/min); default the file's X...RPM")
+    m.add_argument("--channel", help="variable, e.g. X105_DE_time (default: the record's drive end, "
+                   "MFPT's gs, or a file's only signal)")
+    m.add_argument("--sample-rate", type=float, metavar="HZ",
+                   help="sample rate (Hz); required where the file does not store it (CWRU: 12000 or 48000)")
+    m.add_argument("--rpm", type=float, help="shaft speed (rev/min); default the file's")
+    m.add_argument("--bearing", default=None, metavar="NAME|FILE.yaml",
+                   help="bearing monitored (catalog name or YAML), stored in the bag (default 6205)")
+    m.add_argument("--units", choices=("g", "m/s2"), help="unit of a one-signal file (default g)")
     m.add_argument("--chunk-duration", type=float, default=0.01, metavar="S", help="seconds per chunk (default 0.01)")
     m.add_argument("--start-time", type=float, default=0.0, metavar="S", help="stamp of the first sample (default 0)")
     m.add_argument("--duration", type=float, metavar="S", help="convert only the first S seconds")
@@ -70,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def info_lines(bag_dir) -> list:
     """``bearing-bag info`` output lines (raises BagError)."""
-    from bearing_diagnoser.bag_files import bag_namespace_hint, bag_storage, open_bag
+    from .bag_read import bag_bearing, bag_namespace_hint, bag_storage, open_bag
     lines = []
     with open_bag(bag_dir) as reader:
         count = reader.message_count
@@ -81,6 +86,8 @@ def info_lines(bag_dir) -> list:
         ns = bag_namespace_hint(bag_dir)
         if ns is not None:
             lines.append(f"namespace:  {'/' + ns if ns else '/ (root)'}")
+        if bag_bearing(bag_dir):
+            lines.append(f"bearing:    {bag_bearing(bag_dir)}")
         lines.append(f"duration:   {duration:.3f} s")
         if count:
             lines.append(f"start:      {start * 1e-9:.9f} s")
@@ -95,22 +102,29 @@ def info_lines(bag_dir) -> list:
 
 def main(argv=None) -> int:
     """Run the CLI; returns the exit status (0 on success, 2 on bad input)."""
-    from bearing_diagnoser.bag_files import BagError
-    from bearing_diagnoser.signal_files import InputError
+    from bearing_common.bearings import BearingError, bearing_spec, load_bearing
+
+    from .bag_types import BagError
+    from .recording import InputError
     args = build_parser().parse_args(argv)
     try:
         if args.command == "info":
             for line in info_lines(args.bag):
                 print(line)
         elif args.command == "from-mat":
-            from .bag_write import mat_to_bag
-            res = mat_to_bag(args.mat, args.out, args.sample_rate, channel=args.channel, rpm=args.rpm,
-                             chunk_duration=args.chunk_duration, start_time=args.start_time,
-                             storage=args.storage, namespace=args.namespace, max_duration=args.duration,
-                             resample_to=args.resample)
+            from .bag_write import recording_to_bag
+            from .mat_files import load_mat
+            bearing = load_bearing(args.bearing)  # validated before anything is written
+            rec = load_mat(args.mat, sample_rate=args.sample_rate, rpm=args.rpm, channel=args.channel,
+                           units=args.units)
+            for note in rec.notes or ():
+                print(f"bearing-bag: {note}", file=sys.stderr)
+            res = recording_to_bag(rec, args.out, chunk_duration=args.chunk_duration, start_time=args.start_time,
+                                   storage=args.storage, namespace=args.namespace, max_duration=args.duration,
+                                   resample_to=args.resample, bearing=bearing_spec(bearing))
             print(f"bearing-bag: wrote {res.chunks} chunks ({res.samples} samples, {res.duration:.3f} s at "
-                  f"{res.sample_rate:g} Hz, {res.rpm:g} rpm from the {res.rpm_from}) to {res.path}",
-                  file=sys.stderr)
+                  f"{res.sample_rate:g} Hz, {res.rpm:g} rpm{' from the command line' if args.rpm else ''}, "
+                  f"bearing {bearing.name}) to {res.path}", file=sys.stderr)
         elif args.command == "record":
             if args.duration is not None and not args.duration > 0:
                 raise BagError(f"duration must be positive, got {args.duration:g} s")
@@ -118,10 +132,10 @@ def main(argv=None) -> int:
             record(args.out, args.topics, args.namespace, args.storage, args.duration)
         elif args.command == "play":
             from .bag_play import play
-            play(args.bag, rate=args.rate, clock=args.clock, topics=args.topics, loop=args.loop,
+            play(args.bag, rate=args.rate, clock=args.clock, names=args.topics, loop=args.loop,
                  delay=args.delay, namespace=args.namespace,
                  wait_for_subscribers=args.wait_for_subscribers)
-    except (BagError, InputError) as exc:
+    except (BagError, InputError, BearingError) as exc:
         print(f"bearing-bag: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     return 0

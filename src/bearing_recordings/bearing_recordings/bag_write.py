@@ -1,5 +1,5 @@
 """Writing rosbag2 recordings with ``rosbags`` (no rclpy): the writer used by
-``bearing-bag record`` and the CWRU ``.mat`` → bag conversion of ``bearing-bag from-mat``.
+``bearing-bag record`` and the recording → bag conversion of ``bearing-bag from-mat``.
 
 Bags are rosbag2 version 9 directories, MCAP by default (sqlite3 on request), with the
 complete ros2msg definition of every type embedded (dependencies such as
@@ -17,8 +17,12 @@ from typing import Optional
 
 import numpy as np
 
-from bearing_diagnoser.bag_files import (CUSTOM_NAMESPACE, GRAPH_TOPICS, TOPIC_SPEED, TOPIC_VIBRATION,
-                                         BagError, project_typestore)
+from bearing_common import topics
+from bearing_common.topics import Topic
+
+from .bag_types import CUSTOM_BEARING, CUSTOM_NAMESPACE, BagError, project_typestore
+from .recording import Recording, check_rpm
+from .resampling import resample
 
 STORAGES = ("mcap", "sqlite3")
 
@@ -27,21 +31,14 @@ DEFAULT_CHUNK_DURATION = 0.01
 
 
 def topic_qos(latched: bool, depth: int):
-    """The rosbags ``Qos`` a topic is offered with (reliable; transient local if latched)."""
+    """The rosbags ``Qos`` a topic is offered with (reliable; transient local if latched),
+    as :func:`bearing_common.topics.qos` offers it live."""
     from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, QosReliability,
                                     QosTime)
     zero = QosTime(0, 0)
     return Qos(QosHistory.KEEP_LAST, depth, QosReliability.RELIABLE,
                QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
                zero, zero, QosLiveliness.AUTOMATIC, zero, False)
-
-
-def qualify(namespace: str, relative: str) -> str:
-    """Fully qualified topic name of ``relative`` under ``namespace`` (``""`` = root)."""
-    if relative.startswith("/"):
-        return relative
-    ns = (namespace or "").strip("/")
-    return f"/{ns}/{relative}" if ns else f"/{relative}"
 
 
 class BagWriter:
@@ -56,7 +53,7 @@ class BagWriter:
         Namespace of the graph being recorded; stored in the bag's custom_data.
     """
 
-    def __init__(self, out, storage: str = "mcap", namespace: str = ""):
+    def __init__(self, out, storage: str = "mcap", namespace: str = "", bearing: str = ""):
         from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
         if storage not in STORAGES:
             raise BagError(f"unknown storage {storage!r}; expected one of {', '.join(STORAGES)}")
@@ -69,6 +66,8 @@ class BagWriter:
         self._writer = Writer(self.path, version=9, storage_plugin=plugin)
         self._writer.set_custom_data(CUSTOM_NAMESPACE, (namespace or "").strip("/"))
         self._writer.set_custom_data("bearing_bag.writer", "bearing-bag (rosbags)")
+        if bearing:
+            self._writer.set_custom_data(CUSTOM_BEARING, bearing)
         try:
             self._writer.open()
         except (WriterError, OSError) as exc:
@@ -76,6 +75,10 @@ class BagWriter:
         self.connections: dict = {}
         self.counts: dict = {}
         self._closed = False
+
+    def add_graph_topic(self, topic: Topic, namespace: str = ""):
+        """Register one of the graph's topics under ``namespace`` with its contract QoS."""
+        return self.add_topic(topics.qualified(namespace, topic), topic.msgtype, topic.latched, topic.depth)
 
     def add_topic(self, name: str, msgtype: str, latched: bool = False, depth: int = 10):
         """Register fully qualified topic ``name`` of ``msgtype``; returns the connection."""
@@ -119,63 +122,50 @@ def time_msg(store, seconds: float):
 
 
 @dataclass
-class MatConversion:
-    """Summary of :func:`mat_to_bag`."""
+class Conversion:
+    """Summary of :func:`recording_to_bag`."""
 
     path: str
     chunks: int
     samples: int
     sample_rate: float
     rpm: float
-    rpm_from: str  # "file" or "command line"
     duration: float
 
 
-def mat_to_bag(mat_path, out, sample_rate: float, channel: Optional[str] = None, rpm: Optional[float] = None,
-               chunk_duration: float = DEFAULT_CHUNK_DURATION, start_time: float = 0.0,
-               storage: str = "mcap", namespace: str = "", max_duration: Optional[float] = None,
-               resample_to: Optional[float] = None) -> MatConversion:
-    """Convert a CWRU-style recording into a bag as a sensor driver would have published it.
+def recording_to_bag(rec: Recording, out, chunk_duration: float = DEFAULT_CHUNK_DURATION,
+                     start_time: float = 0.0, storage: str = "mcap", namespace: str = "",
+                     max_duration: Optional[float] = None, resample_to: Optional[float] = None,
+                     bearing: str = "") -> Conversion:
+    """Write a recording into a bag as a sensor driver would have published it.
 
-    ``vibration/drive_end``: VibrationChunk of ``chunk_duration`` s (the last one may be
-    shorter), samples in m/s² (g × 9.80665), source ``cwru``, frame_id ``drive_end``,
-    stamp = ``start_time`` + first_sample_index / sample_rate.  ``shaft_speed``: one
-    ShaftSpeed (rad/s) per chunk with the same stamp, from ``rpm`` or the file's
-    ``X...RPM`` variable.  Log time = stamp.  ``max_duration`` (s) keeps only the start.
-    ``resample_to`` (Hz): anti-aliased resampling first (e.g. the 48 kHz normal record 97
-    to the 12 kHz rate of the CWRU model set), as a sensor driver configured for it would deliver.
-    Loading (units, channel and rpm lookup) is ``bearing_diagnoser.signal_files.load_mat``.
+    ``vibration/drive_end`` in chunks of ``chunk_duration`` s, ``shaft_speed`` at the
+    recording's speed (see :func:`write_signal_bag`); source = the recording's (``cwru``,
+    ``mfpt``, ...). ``max_duration`` (s) keeps only the start; ``resample_to`` (Hz)
+    resamples (anti-aliased) first, as a driver configured for that rate would deliver;
+    ``bearing`` (catalog name or description) is stored in the bag's custom data.
     """
-    from bearing_diagnoser.signal_files import load_mat
-    if not (np.isfinite(chunk_duration) and chunk_duration > 0):
-        raise BagError(f"chunk duration must be positive, got {chunk_duration:g} s")
-    if not (np.isfinite(start_time) and start_time >= 0):
-        raise BagError(f"start time must be ≥ 0 s, got {start_time:g}")
-    rec = load_mat(mat_path, sample_rate=sample_rate, rpm=rpm, channel=channel)
     if rec.rpm is None:
-        raise BagError(f"{mat_path}: no X...RPM variable for channel {rec.channel}; give --rpm")
-    if not (np.isfinite(rec.rpm) and rec.rpm > 0):
-        raise BagError(f"shaft speed must be positive, got {rec.rpm:g} rpm")
-    from bearing_diagnoser.offline import resample
-
+        raise BagError(f"{rec.path}: the recording states no shaft speed; give --rpm")
+    rpm = check_rpm(rec.rpm)
     x, fs = rec.accel, rec.sample_rate
     if resample_to is not None:
         if not (np.isfinite(resample_to) and resample_to > 0):
             raise BagError(f"resample rate must be positive, got {resample_to:g} Hz")
         x, fs = resample(x, fs, resample_to), float(resample_to)
     if max_duration is not None:
+        if not (np.isfinite(max_duration) and max_duration > 0):
+            raise BagError(f"duration must be positive, got {max_duration:g} s")
         x = x[: max(1, int(round(max_duration * fs)))]
-    count = write_signal_bag(out, x, fs, rec.rpm, source="cwru",
-                             speed_source="cwru" if rpm is None else "command_line",
-                             chunk_duration=chunk_duration, start_time=start_time, storage=storage,
-                             namespace=namespace)
-    return MatConversion(str(out), count, int(x.size), fs, float(rec.rpm),
-                         "file" if rpm is None else "command line", x.size / fs)
+    count = write_signal_bag(out, x, fs, rpm, source=rec.source, chunk_duration=chunk_duration,
+                             start_time=start_time, storage=storage, namespace=namespace, bearing=bearing)
+    return Conversion(str(out), count, int(x.size), fs, rpm, x.size / fs)
 
 
 def write_signal_bag(out, samples, sample_rate: float, rpm: float, source: str, speed_source: str = "",
                      chunk_duration: float = DEFAULT_CHUNK_DURATION, start_time: float = 0.0,
-                     storage: str = "mcap", namespace: str = "", frame_id: str = "drive_end") -> int:
+                     storage: str = "mcap", namespace: str = "", frame_id: str = "drive_end",
+                     bearing: str = "") -> int:
     """Write a uniformly sampled acceleration signal (m/s²) as the graph's topics; return the chunk count.
 
     ``vibration/drive_end``: VibrationChunk of ``chunk_duration`` s (the last may be
@@ -193,14 +183,14 @@ def write_signal_bag(out, samples, sample_rate: float, rpm: float, source: str, 
     fs = float(sample_rate)
     n_chunk = max(1, int(round(chunk_duration * fs)))
     omega = float(rpm) * 2.0 * np.pi / 60.0
-    vib, spd = qualify(namespace, TOPIC_VIBRATION), qualify(namespace, TOPIC_SPEED)
-    vib_type, spd_type = GRAPH_TOPICS[TOPIC_VIBRATION].msgtype, GRAPH_TOPICS[TOPIC_SPEED].msgtype
+    vib, spd = topics.qualified(namespace, topics.VIBRATION), topics.qualified(namespace, topics.SHAFT_SPEED)
+    vib_type, spd_type = topics.VIBRATION.msgtype, topics.SHAFT_SPEED.msgtype
     count = 0
-    with BagWriter(out, storage, namespace) as bag:
+    with BagWriter(out, storage, namespace, bearing) as bag:
         ts = bag.typestore
         Header, Chunk, Speed = (ts.types["std_msgs/msg/Header"], ts.types[vib_type], ts.types[spd_type])
-        bag.add_topic(vib, vib_type, False, GRAPH_TOPICS[TOPIC_VIBRATION].depth)
-        bag.add_topic(spd, spd_type, False, GRAPH_TOPICS[TOPIC_SPEED].depth)
+        bag.add_graph_topic(topics.VIBRATION, namespace)
+        bag.add_graph_topic(topics.SHAFT_SPEED, namespace)
         for i0 in range(0, x.size, n_chunk):
             stamp = time_msg(ts, start_time + i0 / fs)
             log_ns = stamp.sec * 1_000_000_000 + stamp.nanosec

@@ -20,9 +20,9 @@ import time
 
 import numpy as np
 
-from .hw_model import load_model_set
-from .impulse_trains import impulse_train
-from .observer import FaultObserver
+from bearing_observer.hw_model import load_model_set
+from bearing_observer.impulse_trains import impulse_train
+from bearing_observer.observer import FaultObserver
 
 
 def _signal(model, seconds: float, seed: int = 0) -> np.ndarray:
@@ -80,7 +80,7 @@ def _relabel(model, sample_rate: float):
 
 def identification_time(seconds: float = 0.5) -> float:
     """Wall time (s) of :func:`identify_fault_model` on a synthetic 48 kHz OR record."""
-    from .identification import identify_fault_model
+    from bearing_observer.identification import identify_fault_model
 
     model = load_model_set("sim_48k", 48000.0)["outer_race"]
     y = _signal(model, seconds, seed=1)

@@ -10,70 +10,46 @@ recording and close the bag, which is then complete and readable.
 
 from __future__ import annotations
 
-import importlib
 import signal
 import sys
 import time
 from typing import Callable, Optional
 
-from bearing_diagnoser.bag_files import DEFAULT_RECORD_TOPICS, GRAPH_TOPICS, BagError
+from bearing_common import topics
 
-from .bag_write import BagWriter, qualify
+from .bag_types import BagError
+from .bag_write import BagWriter
+from .stop_signals import StopSignals
+
+#: Recorded by default: the whole graph but ``/diagnostics`` (for humans; add it with ``--topics``).
+DEFAULT_RECORD_TOPICS = tuple(n for n in topics.GRAPH_TOPICS if n != topics.DIAGNOSTICS.name)
+
+#: Queue depth of the recorder's subscriptions (contract QoS policies, deeper queue).
+RECORD_DEPTH = 100
 
 
 def message_class(msgtype: str):
     """The rclpy message class of a rosbag2 type name such as ``bearing_msgs/msg/FaultState``."""
     try:
-        pkg, kind, name = msgtype.split("/")
-        return getattr(importlib.import_module(f"{pkg}.{kind}"), name)
+        return topics.message_class(msgtype)
     except (ValueError, ImportError, AttributeError):
         raise BagError(f"message type {msgtype} is not importable here (is its package installed?)") from None
 
 
-def rclpy_qos(latched: bool, depth: int):
-    """rclpy QoS profile: reliable, keep last ``depth``, transient local if ``latched``."""
-    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
-
-
-class _StopFlag:
-    """Set by SIGINT / SIGTERM (installed for the duration of a recording)."""
-
-    def __init__(self):
-        self.signal: Optional[int] = None
-        self._old = {}
-
-    def __enter__(self):
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            self._old[sig] = signal.signal(sig, self._handle)
-        return self
-
-    def _handle(self, signum, _frame):
-        self.signal = signum
-
-    def __exit__(self, *exc):
-        for sig, old in self._old.items():
-            signal.signal(sig, old)
-
-    def __bool__(self):
-        return self.signal is not None
-
-
-def record(out, topics=None, namespace: str = "", storage: str = "mcap", duration: Optional[float] = None,
+def record(out, names=None, namespace: str = "", storage: str = "mcap", duration: Optional[float] = None,
            log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)) -> dict:
     """Record until SIGINT/SIGTERM or ``duration`` (s, wall time); return counts per topic.
 
     ``topics`` are graph topic names (relative to ``namespace``, or absolute); their
-    types come from :data:`~bearing_diagnoser.bag_files.GRAPH_TOPICS`, or for other
+    types and QoS come from :data:`bearing_common.topics.GRAPH_TOPICS`, or for other
     topics from the graph once a publisher appears.
     """
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    wanted = list(topics or DEFAULT_RECORD_TOPICS)
-    with _StopFlag() as stop:
+    wanted = list(names or DEFAULT_RECORD_TOPICS)
+    with StopSignals() as stop:
         context = rclpy.Context()
         rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
         bag = None
@@ -86,27 +62,31 @@ def record(out, topics=None, namespace: str = "", storage: str = "mcap", duratio
             clock = node.get_clock()
             pending = {}  # qualified name -> relative/absolute name as given
             for name in wanted:
-                pending[qualify(namespace, name)] = name
+                pending[topics.qualified(namespace, name)] = name
 
-            def subscribe(qualified: str, msgtype: str, latched: bool, depth: int):
-                bag.add_topic(qualified, msgtype, latched, depth)
+            def subscribe(qualified: str, msgtype: str, spec: Optional[topics.Topic]):
+                if spec is not None:
+                    bag.add_topic(qualified, msgtype, spec.latched, spec.depth)
+                else:
+                    bag.add_topic(qualified, msgtype, False, RECORD_DEPTH)
 
                 def on_raw(raw, _name=qualified):
                     bag.write(_name, clock.now().nanoseconds, raw)
                     if bag.counts[_name] == 1:
                         log(f"bearing-bag: first message on {_name}")
 
+                spec = spec or topics.Topic(qualified, msgtype, RECORD_DEPTH)
                 node.create_subscription(message_class(msgtype), qualified, on_raw,
-                                         rclpy_qos(latched, max(depth, 100)), raw=True)
+                                         topics.qos(spec, depth=max(spec.depth, RECORD_DEPTH)), raw=True)
 
             def resolve_pending():
                 known = dict(node.get_topic_names_and_types()) if pending else {}
                 for qualified, given in list(pending.items()):
-                    spec = GRAPH_TOPICS.get(given) or GRAPH_TOPICS.get(given.lstrip("/"))
+                    spec = topics.GRAPH_TOPICS.get(given) or topics.GRAPH_TOPICS.get(given.lstrip("/"))
                     if spec is not None:
-                        subscribe(qualified, spec.msgtype, spec.latched, spec.depth)
+                        subscribe(qualified, spec.msgtype, spec)
                     elif qualified in known:
-                        subscribe(qualified, known[qualified][0], False, 100)
+                        subscribe(qualified, known[qualified][0], None)
                     else:
                         continue
                     del pending[qualified]

@@ -1,0 +1,1 @@
+"""Development code: benchmarks (`make bench`), evaluation helpers and figure scripts (not installed)."""

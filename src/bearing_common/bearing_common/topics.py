@@ -1,0 +1,100 @@
+"""The graph's topics: name, message type and QoS, in one table (``CONTRACT.md``, "Topics").
+
+Every node, bag tool, watcher and test takes its topic names and QoS from here. Names
+are relative (a namespace per machine works), except the ROS-wide ``/diagnostics`` and
+``/clock``.
+
+QoS, chosen on purpose:
+
+* sample streams (vibration, unbalance, residuals): reliable, keep last 50 — a consumer
+  that is briefly busy loses nothing (a 0.01 s chunk every 10 ms: 0.5 s of slack), and
+  a late joiner does not get stale signal;
+* ``shaft_speed``: reliable, keep last 10 (slow, only the latest matters);
+* ``fault_state``: reliable, transient local, keep last 1 — a late ``ros2 topic echo``
+  gets exactly the current state; ``sim/truth`` keeps the last 10 changes for plots;
+* ``fleet_state``: reliable, transient local, keep last 1 (the current summary);
+* ``/diagnostics``: the ROS default (reliable, volatile, keep last 10), as
+  ``diagnostic_aggregator`` expects.
+
+Subscribers that must not miss a state change (recorders, watchers) use the same policies
+with a deeper queue: ``qos(FAULT_STATE, depth=100)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .states import FaultState
+
+
+@dataclass(frozen=True)
+class Topic:
+    """One topic of the graph.
+
+    Attributes
+    ----------
+    name : str
+        Relative name (``/diagnostics`` and ``/clock`` are absolute).
+    msgtype : str
+        ROS type name, e.g. ``bearing_msgs/msg/VibrationChunk``.
+    depth : int
+        Keep-last depth of publishers (and by default of subscribers).
+    latched : bool
+        Transient local durability: a late subscriber receives the last ``depth`` samples.
+    """
+
+    name: str
+    msgtype: str
+    depth: int
+    latched: bool = False
+
+
+VIBRATION = Topic("vibration/drive_end", "bearing_msgs/msg/VibrationChunk", 50)
+UNBALANCE = Topic("unbalance", "bearing_msgs/msg/VibrationChunk", 50)
+SHAFT_SPEED = Topic("shaft_speed", "bearing_msgs/msg/ShaftSpeed", 10)
+TRUTH = Topic("sim/truth", "bearing_msgs/msg/FaultState", 10, latched=True)
+RESIDUAL_OUTER_RACE = Topic("residual/outer_race", "bearing_msgs/msg/Residual", 50)
+RESIDUAL_INNER_RACE = Topic("residual/inner_race", "bearing_msgs/msg/Residual", 50)
+FAULT_STATE = Topic("fault_state", "bearing_msgs/msg/FaultState", 1, latched=True)
+FLEET_STATE = Topic("fleet_state", "bearing_msgs/msg/FleetState", 1, latched=True)
+DIAGNOSTICS = Topic("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", 10)
+CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock", 10)
+
+#: Residual topic per fault hypothesis.
+RESIDUALS = {FaultState.OUTER_RACE: RESIDUAL_OUTER_RACE, FaultState.INNER_RACE: RESIDUAL_INNER_RACE}
+
+#: Every topic of one machine's graph, in the order recorders list them.
+GRAPH_TOPICS: dict[str, Topic] = {t.name: t for t in (
+    VIBRATION, UNBALANCE, SHAFT_SPEED, TRUTH, RESIDUAL_OUTER_RACE, RESIDUAL_INNER_RACE, FAULT_STATE,
+    DIAGNOSTICS)}
+
+
+def residual_topic(fault) -> Topic:
+    """The residual topic of a fault hypothesis (FaultState or its integer)."""
+    return RESIDUALS[FaultState(fault)]
+
+
+def qos(topic: Topic, depth: int | None = None):
+    """The rclpy QoSProfile of ``topic`` (``depth`` overrides the queue depth only)."""
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth or topic.depth,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if topic.latched else DurabilityPolicy.VOLATILE)
+
+
+def message_class(msgtype: str):
+    """The generated Python class of ``pkg/msg/Name`` (imported on demand)."""
+    import importlib
+
+    package, kind, name = msgtype.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+
+def qualified(namespace: str, topic: Topic | str) -> str:
+    """The fully qualified name of ``topic`` under ``namespace`` (``""`` = root)."""
+    name = topic.name if isinstance(topic, Topic) else topic
+    if name.startswith("/"):
+        return name
+    ns = namespace.strip("/")
+    return f"/{ns}/{name}" if ns else f"/{name}"

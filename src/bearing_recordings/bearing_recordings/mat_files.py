@@ -1,0 +1,148 @@
+"""MATLAB recordings of the three public rigs (and any one-signal file), with one channel rule.
+
+Kinds, told apart by their variables:
+
+* **MFPT** — a struct ``bearing`` with ``gs`` (acceleration, g), ``sr`` (sample rate, Hz),
+  ``rate`` (shaft, Hz) and ``load``: nothing else is needed.
+* **CWRU** — variables ``X<rec>_DE_time``, ``X<rec>_FE_time``, ``X<rec>_BA_time`` (g) and
+  ``X<rec>RPM``; the sample rate is not stored (12 or 48 kHz) and must be given.
+* **one signal** — exactly one numeric vector variable, whatever its name (HIT-SM:
+  ``z15_1``, ``VarName3``, ...); sample rate must be given, units assumed g unless stated.
+
+The channel rule (used by ``bearing-diagnose``, ``bearing-bag from-mat`` and
+``bearing-identify`` alike): ``channel`` names the variable (MFPT: ``gs``) when given.
+Otherwise a CWRU file gives its *record's* drive-end channel, the record being the one
+whose ``X<rec>RPM`` the file holds, else the number the file name starts with (some CWRU
+files also carry another record's variables; the first ``*_DE_time`` key is not a rule);
+a one-signal file gives its signal; anything else is an error listing the variables.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+import re
+
+import numpy as np
+
+from bearing_common.units import STANDARD_GRAVITY
+
+from .recording import InputError, Recording, check_rate, check_rpm, check_samples
+
+_CWRU_CHANNEL = re.compile(r"X(\d+)_(DE|FE|BA)_time")
+_CWRU_RPM = re.compile(r"X(\d+)RPM")
+
+#: Units a one-signal file may be declared in, as m/s² per unit.
+UNITS = {"g": STANDARD_GRAVITY, "m/s2": 1.0}
+
+
+def _read(path) -> dict:
+    from scipy.io import loadmat
+    try:
+        return loadmat(path)
+    except NotImplementedError:
+        raise InputError(f"{path}: MATLAB v7.3 (HDF5) files are not supported; save it with "
+                         "save(..., '-v7')") from None
+    except Exception as exc:  # scipy raises ValueError, TypeError, OSError, ... on damaged files
+        raise InputError(f"{path}: not a readable MATLAB file ({exc.__class__.__name__}: "
+                         f"{' '.join(str(exc).split())})") from None
+
+
+def _scalar(value, what: str, path) -> float:
+    arr = np.asarray(value)
+    if arr.dtype == object:
+        arr = np.asarray(arr.ravel()[0]) if arr.size == 1 else arr
+    try:
+        return float(np.asarray(arr, dtype=float).ravel()[0])
+    except (TypeError, ValueError, IndexError):
+        raise InputError(f"{path}: {what} is not a number") from None
+
+
+def load_mat(path, sample_rate: float | None = None, rpm: float | None = None,
+             channel: str | None = None, units: str | None = None) -> Recording:
+    """Load a MATLAB recording (MFPT, CWRU or one signal) in m/s².
+
+    ``sample_rate`` (Hz) is required for CWRU and one-signal files and overrides MFPT's
+    ``sr``; ``rpm`` overrides the file's speed; ``units`` (``g`` or ``m/s2``) states the
+    unit of a one-signal file (default g, said in the recording's notes).
+    """
+    m = _read(path)
+    keys = sorted(k for k in m if not k.startswith("__"))
+    if "bearing" in keys and getattr(m["bearing"], "dtype", None) is not None and m["bearing"].dtype.names:
+        return _load_mfpt(path, m["bearing"], sample_rate, rpm, channel)
+    if any(_CWRU_CHANNEL.fullmatch(k) for k in keys):
+        return _load_cwru(path, m, keys, sample_rate, rpm, channel)
+    return _load_single(path, m, keys, sample_rate, rpm, channel, units)
+
+
+def _need_rate(path, sample_rate, hint: str) -> float:
+    if sample_rate is None:
+        raise InputError(f"{path}: the file does not store its sample rate; give --sample-rate ({hint})")
+    return check_rate(sample_rate)
+
+
+def _load_mfpt(path, struct, sample_rate, rpm, channel) -> Recording:
+    fields = struct.dtype.names
+    missing = [f for f in ("gs", "sr", "rate") if f not in fields]
+    if missing:
+        raise InputError(f"{path}: MFPT struct 'bearing' lacks {', '.join(missing)} (has {', '.join(fields)})")
+    rec = struct[0, 0] if struct.ndim == 2 else struct.ravel()[0]
+    ch = channel or "gs"
+    if ch not in fields:
+        raise InputError(f"{path}: no channel {ch!r} in the MFPT struct (has {', '.join(fields)})")
+    fs = check_rate(sample_rate if sample_rate is not None else _scalar(rec["sr"], "bearing.sr", path))
+    speed = check_rpm(rpm) if rpm is not None else check_rpm(60.0 * _scalar(rec["rate"], "bearing.rate", path))
+    x = check_samples(rec[ch], f"{path}:bearing.{ch}") * STANDARD_GRAVITY
+    return Recording(x, fs, speed, "mfpt", None, ch, str(path))
+
+
+def _cwru_record(path, keys) -> str:
+    records_with_rpm = sorted({_CWRU_RPM.fullmatch(k).group(1) for k in keys if _CWRU_RPM.fullmatch(k)})
+    if len(records_with_rpm) == 1:
+        return records_with_rpm[0]
+    channels = {_CWRU_CHANNEL.fullmatch(k).group(1) for k in keys if _CWRU_CHANNEL.fullmatch(k)}
+    lead = re.match(r"0*(\d+)", Path(path).name)
+    if lead:
+        for rec in channels:
+            if int(rec) == int(lead.group(1)):
+                return rec
+    if len(channels) == 1:
+        return channels.pop()
+    raise InputError(f"{path}: holds several CWRU records ({', '.join(sorted(channels))}); "
+                     f"give --channel (available: {', '.join(keys)})")
+
+
+def _load_cwru(path, m, keys, sample_rate, rpm, channel) -> Recording:
+    fs = _need_rate(path, sample_rate, "CWRU: 12000 or 48000")
+    if channel is None:
+        channel = f"X{_cwru_record(path, keys)}_DE_time"
+    if channel not in keys:
+        raise InputError(f"{path}: no channel {channel!r}; available: {', '.join(keys)}")
+    if rpm is not None:
+        speed = check_rpm(rpm)
+    else:
+        rec = _CWRU_CHANNEL.fullmatch(channel)
+        key = f"X{rec.group(1)}RPM" if rec else None
+        speed = check_rpm(_scalar(m[key], key, path)) if key in m else None
+    x = check_samples(m[channel], f"{path}:{channel}") * STANDARD_GRAVITY
+    return Recording(x, fs, speed, "cwru", None, channel, str(path))
+
+
+def _load_single(path, m, keys, sample_rate, rpm, channel, units) -> Recording:
+    signals = [k for k in keys if np.asarray(m[k]).dtype.kind in "fiu" and np.asarray(m[k]).size > 1]
+    if channel is None:
+        if len(signals) != 1:
+            raise InputError(f"{path}: cannot tell which variable is the vibration signal; give --channel "
+                             f"(available: {', '.join(keys) or 'none'})")
+        channel = signals[0]
+    if channel not in keys:
+        raise InputError(f"{path}: no channel {channel!r}; available: {', '.join(keys)}")
+    fs = _need_rate(path, sample_rate, "the rig's documentation states it")
+    notes = []
+    if units is None:
+        units = "g"
+        notes.append(f"units of {channel} not stated; assuming g (give --units m/s2 otherwise)")
+    if units not in UNITS:
+        raise InputError(f"unknown units {units!r}; expected one of {', '.join(UNITS)}")
+    x = check_samples(m[channel], f"{path}:{channel}") * UNITS[units]
+    return Recording(x, fs, None if rpm is None else check_rpm(rpm), "mat", None, channel, str(path),
+                     notes=notes)
