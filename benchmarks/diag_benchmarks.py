@@ -13,17 +13,17 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from bearing_common.bearings import CATALOG, fault_frequency
+
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 from bearing_common.states import FaultState
-
 from bearing_diagnoser.decision import HYPOTHESES, Diagnoser, config_for
-from bearing_diagnoser.offline import Segment, diagnose_measurement, diagnose_recording
+from bearing_diagnoser.offline import diagnose_measurement, diagnose_recording
 
 from .evaluation import THESIS_CASES, score_case, simulate_case
 

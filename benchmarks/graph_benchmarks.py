@@ -25,6 +25,7 @@ SEGMENT_S = 1.0
 def bench_end_to_end_latency():
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
+
     from bearing_common import topics
     from bearing_msgs.msg import FaultState, VibrationChunk
 

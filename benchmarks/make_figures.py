@@ -17,8 +17,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from benchmarks.obs_figures import make_figures  # noqa: E402
 from bearing_common.bearings import CATALOG, fault_frequency  # noqa: E402
+from benchmarks.obs_figures import make_figures  # noqa: E402
+
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 from bearing_common.states import FaultState  # noqa: E402
 from bearing_sim.schedule import scenario  # noqa: E402

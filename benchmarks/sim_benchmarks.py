@@ -47,6 +47,7 @@ def first_call_time():
 def rhs_cost_us(n=200000):
     """Mean cost of one compiled right-hand-side evaluation (us) near equilibrium."""
     from numba import njit
+
     from bearing_sim.model_parameters import ModelParameters
     from bearing_sim.rotor_rhs import NSTATE, WORK_LEN, make_rhs_args, rhs, static_equilibrium
 

@@ -1,7 +1,6 @@
 """Fixtures for tests that run real nodes over DDS."""
 
 import pytest
-
 from ros_harness import RosGraph, session_domain_id
 
 

@@ -12,7 +12,7 @@ import os
 import pathlib
 import threading
 import time
-from typing import Callable, Optional
+from collections.abc import Callable
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
@@ -46,8 +46,8 @@ def executable(package: str, name: str) -> pathlib.Path:
     return path
 
 
-def ros_args(name: Optional[str] = None, params: Optional[dict] = None,
-             params_file: Optional[pathlib.Path] = None) -> list:
+def ros_args(name: str | None = None, params: dict | None = None,
+             params_file: pathlib.Path | None = None) -> list:
     """``--ros-args`` for a node name, parameters and a parameters file."""
     args = ["--ros-args"]
     if name:
@@ -83,8 +83,8 @@ class RosGraph:
         while self._spinning and self.context.ok():
             self.executor.spin_once(timeout_sec=0.05)
 
-    def start(self, package: str, exe: str, name: Optional[str] = None, params: Optional[dict] = None,
-              params_file: Optional[pathlib.Path] = None, argv: Optional[list] = None):
+    def start(self, package: str, exe: str, name: str | None = None, params: dict | None = None,
+              params_file: pathlib.Path | None = None, argv: list | None = None):
         """Start a node executable (or ``argv``) as a separate process; return its Member."""
         command = argv if argv is not None else [str(executable(package, exe))] + ros_args(name, params, params_file)
         return self.processes.start(name or exe, command)
@@ -112,9 +112,10 @@ class RosGraph:
         while time.monotonic() < deadline:
             if condition():
                 return
-            for member in self.processes.members:
-                if member.returncode not in (None, 0):
-                    break
+            crashed = [m.name for m in self.processes.members if m.returncode not in (None, 0)]
+            if crashed:
+                raise AssertionError(f"{', '.join(crashed)} exited with an error while waiting for {what}\n"
+                                     f"{self.output()}")
             time.sleep(0.05)
         raise AssertionError(f"timed out after {timeout} s waiting for {what}\n{self.output()}")
 

@@ -10,14 +10,14 @@ import time
 
 import numpy as np
 import pytest
+from graph_helpers import BAG_CLI
+from publish_probe import known_chunk
+from ros_harness import REPO_ROOT
 
 from bearing_common import topics
 from bearing_msgs.msg import FaultState
 from bearing_recordings.bag_read import read_bag
 from bearing_recordings.bag_write import BagWriter
-from graph_helpers import BAG_CLI
-from publish_probe import known_chunk
-from ros_harness import REPO_ROOT
 
 pytestmark = pytest.mark.ros
 

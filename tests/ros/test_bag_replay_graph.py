@@ -16,12 +16,22 @@ import json
 import subprocess
 
 import pytest
+from graph_helpers import (
+    BAG_CLI,
+    STATE_CODES,
+    live_states,
+    params_file,
+    replay_into_pipeline,
+    start_pipeline,
+    stop,
+    transitions,
+    wait_quiet,
+    wait_spec,
+)
+from ros_harness import executable
 
 from bearing_common import topics
 from bearing_common.states import FaultState
-from graph_helpers import (BAG_CLI, STATE_CODES, live_states, params_file, replay_into_pipeline, start_pipeline, stop,
-                           transitions, wait_quiet, wait_spec)
-from ros_harness import executable
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 

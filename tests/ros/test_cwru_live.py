@@ -11,11 +11,11 @@ import json
 import subprocess
 
 import pytest
+from graph_helpers import BAG_CLI, STATE_CODES, live_states, replay_into_pipeline, transitions, wait_quiet
+from ros_harness import executable
 
 from bearing_common import topics
 from bearing_common.states import FaultState
-from graph_helpers import BAG_CLI, STATE_CODES, live_states, replay_into_pipeline, transitions, wait_quiet
-from ros_harness import executable
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 

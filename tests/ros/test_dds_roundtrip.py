@@ -4,10 +4,10 @@ import os
 import sys
 
 import pytest
-
-from bearing_common import topics
 from publish_probe import known_chunk
 from ros_harness import REPO_ROOT
+
+from bearing_common import topics
 
 pytestmark = pytest.mark.ros
 

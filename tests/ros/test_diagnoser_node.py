@@ -3,6 +3,7 @@
 import time
 
 import pytest
+
 from bearing_common import topics
 from bearing_common.bearings import CATALOG
 from bearing_diagnoser.synthetic import burst_train, white_noise

@@ -1,6 +1,7 @@
 """The thesis' eight cases through the live graph: simulator, two observers, diagnoser as separate processes."""
 
 import pytest
+from graph_helpers import wait_spec
 
 from bearing_bringup.graph import GRAPH, config_path
 from bearing_bringup.state_report import StateChange, evaluate, format_table
@@ -22,11 +23,17 @@ def run_graph(ros_graph, scenario, **sim_params):
     truth = ros_graph.subscribe(topics.TRUTH)
     vib = ros_graph.subscribe(topics.VIBRATION)
     members = {}
-    for spec in GRAPH:
-        params = {"scenario": scenario, **sim_params} if spec.executable == "simulator" else None
-        members[spec.name] = ros_graph.start(spec.package, spec.executable, name=spec.name,
-                                             params_file=config_path(), params=params)
-    sim = members["simulator"]
+    for spec in GRAPH:  # the consumers first; the simulator once they and this listener are matched
+        if spec.executable != "simulator":
+            members[spec.name] = ros_graph.start(spec.package, spec.executable, name=spec.name,
+                                                 params_file=config_path())
+    ros_graph.wait_until(lambda: ros_graph.node.count_publishers(topics.FAULT_STATE.name) >= 1, 60.0,
+                         "the diagnoser's fault_state publisher")
+    wait = wait_spec({topics.VIBRATION: 3, topics.RESIDUAL_OUTER_RACE: 1, topics.RESIDUAL_INNER_RACE: 1,
+                      topics.FAULT_STATE: 1})
+    sim = members["simulator"] = ros_graph.start(
+        "bearing_sim", "simulator", name="simulator", params_file=config_path(),
+        params={"scenario": scenario, "wait_for_subscribers": wait, **sim_params})
     ros_graph.wait_until(lambda: sim.returncode is not None, timeout=180.0, what="the scenario to end")
     assert sim.returncode == 0, ros_graph.output()
     end = max(seconds(m.header.stamp) + len(m.samples) / m.sample_rate for m in vib)

@@ -23,6 +23,7 @@ from bearing_recordings.bag_types import BagError, project_typestore
 from bearing_recordings.bag_write import BagWriter, recording_to_bag
 from bearing_recordings.load import load_recording
 from bearing_recordings.mat_files import load_mat
+
 RECORD_105 = "105_IR007_0hp_DE12k.mat"
 VIB, SPEED, RES_IR, STATE = (topics.qualified("", t) for t in (topics.VIBRATION, topics.SHAFT_SPEED,
                                                                 topics.RESIDUAL_INNER_RACE, topics.FAULT_STATE))

@@ -14,8 +14,6 @@ import pathlib
 import subprocess
 import sys
 
-import pytest
-
 from bearing_common import topics
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]

@@ -13,15 +13,19 @@ import pytest
 from numpy.testing import assert_allclose
 
 from bearing_common.bearings import CATALOG, fault_frequency
+
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 from bearing_common.states import FaultState
-
 from bearing_diagnoser.bearing_lines import bearing_lines, decoy_frequencies
 from bearing_diagnoser.calibration import calibrate
 from bearing_diagnoser.decision import Diagnoser, config_for
 from bearing_diagnoser.offline import diagnose_measurement, segments_from_decisions
-from bearing_diagnoser.periodicity import (EnergyEnvelope, folded_peakiness, train_autocorrelation,
-                                           train_cross_correlation)
+from bearing_diagnoser.periodicity import (
+    EnergyEnvelope,
+    folded_peakiness,
+    train_autocorrelation,
+    train_cross_correlation,
+)
 from bearing_diagnoser.synthetic import burst_train, white_noise
 
 FS = 48000.0

@@ -15,12 +15,11 @@ import functools
 import pytest
 
 from bearing_common.states import FaultState
-
 from bearing_diagnoser.cwru_report import RECORDS, load_record, markdown, summarise
 from bearing_diagnoser.offline import diagnose_recording
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _diagnose(directory: str, file: str, rate: float, method: str):
     rec = load_record(directory, file, rate)
     return diagnose_recording(rec, method=method, quiet=True)

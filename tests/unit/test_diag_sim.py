@@ -14,17 +14,17 @@ import functools
 import numpy as np
 import pytest
 
-from benchmarks.evaluation import score_case, simulate_case
+from bearing_common.states import FaultState
 from bearing_diagnoser.offline import diagnose_recording
 from bearing_recordings.recording import Recording
-from bearing_common.states import FaultState
 from bearing_sim.simulator import SimulationConfig, simulate
+from benchmarks.evaluation import score_case, simulate_case
 
 DELAY_MAX = 0.05  # s, after the true change
 NOISE = 4.5e-3  # (m/s²)/√Hz
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _run(case: str, rpm: float, noise: float, method: str = "model"):
     rec = simulate_case(case, rpm, noise)
     res = diagnose_recording(rec, method=method, quiet=True)

@@ -8,7 +8,13 @@ from numpy.testing import assert_allclose
 
 from bearing_observer import hw_model
 from bearing_observer.hw_model import (
-    HWModel, ModelFileError, available_model_sets, default_model_set, load, load_model_set)
+    HWModel,
+    ModelFileError,
+    available_model_sets,
+    default_model_set,
+    load,
+    load_model_set,
+)
 from bearing_observer.piecewise_linear import MonotonePiecewiseLinear
 
 

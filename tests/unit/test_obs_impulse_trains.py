@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from bearing_observer.impulse_trains import (
-    TWO_PI, impact_times, impulse_train, modulated_train_components)
+from bearing_observer.impulse_trains import TWO_PI, impact_times, impulse_train, modulated_train_components
 
 
 def test_impact_times_follow_phase_definition():

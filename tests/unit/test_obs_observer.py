@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from bearing_common.states import FaultState
 from bearing_observer.hw_model import load_model_set
 from bearing_observer.identification import identify_fault_model
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
 from bearing_observer.observer import FaultObserver, ModalFilter, balanced_realization
-from bearing_common.states import FaultState
 from bearing_recordings.mat_files import load_mat
 from bearing_sim.simulator import SimulationConfig, simulate
 

@@ -4,7 +4,6 @@ import os
 import sys
 import time
 
-
 from bearing_bringup.process_group import ProcessGroup
 
 SLEEPER = "import signal, sys, time; print('ready', flush=True); time.sleep(60)"

@@ -7,7 +7,12 @@ import pytest
 
 from bearing_sim import rotor_rhs as R
 from bearing_sim.model_parameters import (
-    BALL_MASS_DE, BALL_MASS_FE, N_BALLS_DE, SHAFT_MASS, VARIANTS, ModelParameters,
+    BALL_MASS_DE,
+    BALL_MASS_FE,
+    N_BALLS_DE,
+    SHAFT_MASS,
+    VARIANTS,
+    ModelParameters,
 )
 
 

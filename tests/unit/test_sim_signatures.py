@@ -4,22 +4,22 @@ Short spans (0.3-0.4 s) at 48 kHz; the envelope-spectrum peak must sit at the
 fault frequency derived from the bearing geometry (eqs. 2.53-2.54) within 0.5 %.
 """
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
 from scipy import signal
 
-from bearing_sim.defects import inner_race_window, outer_race_window
 from bearing_common.states import FaultState as F
 from bearing_common.units import STANDARD_GRAVITY
+from bearing_sim.defects import inner_race_window, outer_race_window
 from bearing_sim.model_parameters import ModelParameters
 from bearing_sim.simulator import SimulationConfig, simulate
 
 FS = 48000.0
 
 
-@lru_cache(maxsize=None)
+@cache
 def run(state, rpm, seconds=0.4):
     out = simulate(SimulationConfig(rpm=rpm, sample_rate=FS), [(state, seconds)])
     return out

@@ -4,10 +4,10 @@ approximate and bearings slip 1-2 %; the decision must stay correct when told th
 
 import pytest
 
-from benchmarks.evaluation import score_case, simulate_case
+from bearing_common.states import FaultState
 from bearing_diagnoser.offline import diagnose_recording
 from bearing_recordings.load import load_recording
-from bearing_common.states import FaultState
+from benchmarks.evaluation import score_case, simulate_case
 
 NOISE = 4.5e-3  # (m/s^2)/sqrt(Hz), the real CWRU normal record's level
 

@@ -4,8 +4,8 @@ One definition used by the launch file (``launch/monitor.launch.py``), the
 ``bearing-graph`` starter of ``make demo`` and the launch/YAML checks in tests.
 """
 
-from dataclasses import dataclass
 import pathlib
+from dataclasses import dataclass
 
 
 @dataclass(frozen=True)

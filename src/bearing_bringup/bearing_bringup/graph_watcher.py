@@ -5,16 +5,17 @@ from __future__ import annotations
 import collections
 import threading
 import time
-from typing import Callable, Optional
+from collections.abc import Callable
 
 import numpy as np
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 
 from bearing_common import topics
-from bearing_msgs.msg import FaultState as FaultStateMsg, VibrationChunk
-from bearing_common.states import FaultState
 from bearing_common.stamps import to_seconds
+from bearing_common.states import FaultState
+from bearing_msgs.msg import FaultState as FaultStateMsg
+from bearing_msgs.msg import VibrationChunk
 
 from .state_report import StateChange
 
@@ -26,7 +27,7 @@ class GraphWatcher:
     """Collects ``fault_state``, ``sim/truth`` and ``vibration/drive_end`` in a background thread."""
 
     def __init__(self, namespace: str = ""):
-        self.on_change: Optional[Callable[[str], None]] = None
+        self.on_change: Callable[[str], None] | None = None
         self._lock = threading.Lock()
         self._decisions: list = []
         self._truth: list = []
@@ -102,7 +103,7 @@ class GraphWatcher:
             time.sleep(0.05)
         return False
 
-    def signal_end(self) -> Optional[float]:
+    def signal_end(self) -> float | None:
         with self._lock:
             return self._end
 

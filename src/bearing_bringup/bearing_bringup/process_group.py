@@ -15,8 +15,9 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, Optional, TextIO
+from typing import TextIO
 
 
 @dataclass
@@ -27,10 +28,10 @@ class Member:
     argv: list
     process: subprocess.Popen
     lines: list = field(default_factory=list)  # everything it printed, for tests and post-mortems
-    reader: Optional[threading.Thread] = None
+    reader: threading.Thread | None = None
 
     @property
-    def returncode(self) -> Optional[int]:
+    def returncode(self) -> int | None:
         return self.process.poll()
 
 
@@ -48,8 +49,8 @@ class ProcessGroup:
         Called for every output line (from reader threads).
     """
 
-    def __init__(self, env: Optional[dict] = None, echo: bool = True, out: Optional[TextIO] = None,
-                 on_line: Optional[Callable[[str, str], None]] = None):
+    def __init__(self, env: dict | None = None, echo: bool = True, out: TextIO | None = None,
+                 on_line: Callable[[str, str], None] | None = None):
         self.env = dict(os.environ if env is None else env)
         self.echo_output = echo
         self.out = out
@@ -58,7 +59,7 @@ class ProcessGroup:
         self._lock = threading.Lock()
         self._width = 10
 
-    def start(self, name: str, argv: list, extra_env: Optional[dict] = None) -> Member:
+    def start(self, name: str, argv: list, extra_env: dict | None = None) -> Member:
         """Start ``argv`` as member ``name``; output is captured line by line."""
         env = dict(self.env)
         env.update(extra_env or {})
@@ -92,7 +93,7 @@ class ProcessGroup:
         with self._lock:
             print(f"[{name:<{self._width}}] {text}", file=self.out or sys.stdout, flush=True)
 
-    def wait_any_exit(self, timeout: float, names: Optional[list] = None) -> Optional[Member]:
+    def wait_any_exit(self, timeout: float, names: list | None = None) -> Member | None:
         """Wait until one of ``names`` (default: any member) exits; return it, or None on timeout."""
         watched = [m for m in self.members if names is None or m.name in names]
         deadline = time.monotonic() + timeout
@@ -124,7 +125,7 @@ class ProcessGroup:
                 member.reader.join(timeout=2.0)
         return {m.name: m.returncode for m in self.members}
 
-    def __enter__(self) -> "ProcessGroup":
+    def __enter__(self) -> ProcessGroup:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -6,8 +6,8 @@ Times are signal (simulation) times in seconds.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Optional, Sequence
 
 from bearing_common.states import FaultState
 
@@ -29,16 +29,16 @@ class SegmentResult:
     true_state: int
     start: float
     end: float
-    detected_state: Optional[int]  # the state in force at the segment's end (None: nothing published)
-    detected_at: Optional[float]  # when that state was first decided within the segment
-    onset: Optional[float]
+    detected_state: int | None  # the state in force at the segment's end (None: nothing published)
+    detected_at: float | None  # when that state was first decided within the segment
+    onset: float | None
 
     @property
     def correct(self) -> bool:
         return self.detected_state == self.true_state
 
     @property
-    def delay(self) -> Optional[float]:
+    def delay(self) -> float | None:
         """Decision time after the true change (s), None when not detected in the segment."""
         if not self.correct or self.detected_at is None:
             return None
@@ -94,5 +94,5 @@ def format_table(results: Sequence[SegmentResult]) -> str:
     return "\n".join(rows)
 
 
-def _fmt(value: Optional[float]) -> str:
+def _fmt(value: float | None) -> str:
     return "-" if value is None else f"{value:.3f}"

@@ -25,10 +25,10 @@ The YAML form (SI; inches and degrees accepted where the key says so)::
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 import math
-from pathlib import Path
 import re
+from dataclasses import dataclass
+from pathlib import Path
 
 from .states import FaultState
 from .units import INCH

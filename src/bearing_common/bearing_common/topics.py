@@ -10,8 +10,10 @@ QoS, chosen on purpose:
   that is briefly busy loses nothing (a 0.01 s chunk every 10 ms: 0.5 s of slack), and
   a late joiner does not get stale signal;
 * ``shaft_speed``: reliable, keep last 10 (slow, only the latest matters);
-* ``fault_state``: reliable, transient local, keep last 1 — a late ``ros2 topic echo``
-  gets exactly the current state; ``sim/truth`` keeps the last 10 changes for plots;
+* ``fault_state``: reliable, transient local, keep last 10 — a late ``ros2 topic echo``
+  gets the current state (the last of at most 10 recent decisions), and a burst of
+  decisions (the diagnoser catching up) does not overwrite samples a reliable reader has
+  not acknowledged yet, as keep-last-1 would; ``sim/truth`` keeps the last 10 changes;
 * ``fleet_state``: reliable, transient local, keep last 1 (the current summary);
 * ``/diagnostics``: the ROS default (reliable, volatile, keep last 10), as
   ``diagnostic_aggregator`` expects.
@@ -55,7 +57,7 @@ SHAFT_SPEED = Topic("shaft_speed", "bearing_msgs/msg/ShaftSpeed", 10)
 TRUTH = Topic("sim/truth", "bearing_msgs/msg/FaultState", 10, latched=True)
 RESIDUAL_OUTER_RACE = Topic("residual/outer_race", "bearing_msgs/msg/Residual", 50)
 RESIDUAL_INNER_RACE = Topic("residual/inner_race", "bearing_msgs/msg/Residual", 50)
-FAULT_STATE = Topic("fault_state", "bearing_msgs/msg/FaultState", 1, latched=True)
+FAULT_STATE = Topic("fault_state", "bearing_msgs/msg/FaultState", 10, latched=True)
 FLEET_STATE = Topic("fleet_state", "bearing_msgs/msg/FleetState", 1, latched=True)
 DIAGNOSTICS = Topic("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", 10)
 CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock", 10)

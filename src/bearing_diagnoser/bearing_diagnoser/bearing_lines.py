@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from bearing_common.bearings import CATALOG, Bearing as BearingGeometry, shaft_hz
+from bearing_common.bearings import CATALOG, shaft_hz
+from bearing_common.bearings import Bearing as BearingGeometry
+
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 
 

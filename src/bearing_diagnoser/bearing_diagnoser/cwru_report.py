@@ -15,13 +15,12 @@ README asks before comparing it with the 12 kHz fault records.
 from __future__ import annotations
 
 import os
-from pathlib import Path
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from bearing_common.states import FaultState
-
 from bearing_recordings.load import load_recording
 from bearing_recordings.recording import InputError, Recording
 from bearing_recordings.resampling import resample

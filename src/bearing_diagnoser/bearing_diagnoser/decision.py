@@ -49,9 +49,9 @@ The default ``pfa`` per model set gives the same number of window exceedances pe
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, field, replace
-import math
 
 import numpy as np
 
@@ -59,8 +59,15 @@ from bearing_common.states import FaultState
 
 from .bearing_lines import decoy_frequencies
 from .calibration import calibrate
-from .periodicity import (EnergyEnvelope, cfar_periodicity, cfar_ses, explain_away, impact_phase_mask,
-                           period_grid, train_correlation)
+from .periodicity import (
+    EnergyEnvelope,
+    cfar_periodicity,
+    cfar_ses,
+    explain_away,
+    impact_phase_mask,
+    period_grid,
+    train_correlation,
+)
 
 HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE)
 

@@ -1,7 +1,7 @@
 """Parameters and /diagnostics contents of the ``diagnoser`` node (no rclpy)."""
 
-from bearing_common.states import FaultState
 from bearing_common.parameters import ParameterSpec, positive
+from bearing_common.states import FaultState
 
 PARAMETERS = (
     ParameterSpec("model_set", "", "decision defaults of this model set (window, band, thresholds); "

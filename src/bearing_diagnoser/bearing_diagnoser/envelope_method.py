@@ -25,6 +25,7 @@ from dataclasses import replace
 import numpy as np
 
 from bearing_common.bearings import CATALOG, fault_frequency
+
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 
 from .decision import HYPOTHESES, Decision, Diagnoser, DiagnoserConfig

@@ -16,16 +16,18 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
 
 from bearing_common import topics
-from bearing_msgs.msg import FaultState as FaultStateMsg, Residual, ShaftSpeed
+from bearing_common.node_main import run_node_main
+from bearing_common.parameters import declare
+from bearing_common.stamps import to_seconds, to_stamp
+from bearing_common.states import FaultState
+from bearing_msgs.msg import FaultState as FaultStateMsg
+from bearing_msgs.msg import Residual, ShaftSpeed
 from bearing_observer.chunk_stream import ChunkStream
 from bearing_observer.hw_model import DEFAULT_SETS
-from bearing_common.states import FaultState
-from bearing_common.node_main import run_node_main
-from bearing_common.stamps import to_seconds, to_stamp
-from bearing_common.parameters import declare
 
 from .decision import Diagnoser, config_for
 from .diagnoser_node_config import PARAMETERS, health
+
 WARN_PERIOD_S = 5.0
 
 

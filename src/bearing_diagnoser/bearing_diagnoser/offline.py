@@ -10,19 +10,20 @@ by the measurement itself and the folding statistic by the squared envelope spec
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 import sys
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from bearing_common.bearings import CATALOG, fault_frequency
+
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 from bearing_common.states import FaultState
-
-from .decision import HYPOTHESES, Decision, Diagnoser, config_for
 from bearing_recordings.recording import InputError, Recording
 from bearing_recordings.resampling import resample
+
+from .decision import HYPOTHESES, Decision, Diagnoser, config_for
 
 #: Model-set rates (Hz) and sources; mirrors bearing_observer.hw_model.DEFAULT_SETS.
 MODEL_SETS = {"sim_48k": ("simulator", 48000.0), "sim_12k": ("simulator", 12000.0),

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import collections
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
@@ -47,16 +46,16 @@ class ChunkStream:
         rate is reported as a resync.
     """
 
-    def __init__(self, name: str, sample_rate: Optional[float] = None,
+    def __init__(self, name: str, sample_rate: float | None = None,
                  max_samples: int = MAX_CHUNK_SAMPLES):
         self.name = name
         self.sample_rate = sample_rate
         self.max_samples = max_samples
         self.counts = collections.Counter()
-        self._next_index: Optional[int] = None
-        self._next_time: Optional[float] = None
-        self._last_stamp: Optional[float] = None
-        self._rate: Optional[float] = None
+        self._next_index: int | None = None
+        self._next_time: float | None = None
+        self._last_stamp: float | None = None
+        self._rate: float | None = None
 
     def check(self, stamp: float, first_index: int, sample_rate: float, samples: np.ndarray) -> Verdict:
         """Check a chunk whose first sample is at ``stamp`` (s) with stream index ``first_index``."""

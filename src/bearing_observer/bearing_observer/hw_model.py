@@ -192,7 +192,7 @@ class HWModel:
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> "HWModel":
+    def from_dict(cls, d: dict) -> HWModel:
         lin = d["linear"]
         b, f = lin["b"], lin["f"]
         if len(b) != int(lin["nb"]) or len(f) != int(lin["nf"]) + 1:

@@ -44,7 +44,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize, signal
 
-from bearing_common.bearings import CATALOG, fault_frequency as kinematic_frequency
+from bearing_common.bearings import CATALOG
+from bearing_common.bearings import fault_frequency as kinematic_frequency
+
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 from bearing_common.states import FaultState, parse_fault
 

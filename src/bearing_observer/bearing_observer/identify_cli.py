@@ -33,6 +33,7 @@ from bearing_recordings.load import load_recording
 from .hw_model import FAULT_TYPES, MODELS_DIR
 from .identification import DEFAULT_ORDERS, N_AVERAGE_IR, identify_fault_model
 
+
 def _sha256(path) -> str:
     h = hashlib.sha256()
     with open(path, "rb") as fh:

@@ -16,17 +16,18 @@ import numpy as np
 from rclpy.node import Node
 
 from bearing_common import topics
-from bearing_msgs.msg import Residual, ShaftSpeed, VibrationChunk
-from bearing_common.states import parse_fault
 from bearing_common.node_main import run_node_main
-from bearing_common.stamps import to_seconds
 from bearing_common.parameters import declare
+from bearing_common.stamps import to_seconds
+from bearing_common.states import parse_fault
+from bearing_msgs.msg import Residual, ShaftSpeed, VibrationChunk
 
 from .chunk_stream import ChunkStream
 from .hw_model import ModelFileError, default_model_set
 from .kernels import warm_up
 from .observer import FaultObserver
 from .observer_node_config import PARAMETERS, default_node_name
+
 WARN_PERIOD_S = 5.0
 
 

@@ -68,7 +68,9 @@ import numpy as np
 from scipy import fft as sp_fft
 from scipy import linalg, signal
 
-from bearing_common.bearings import CATALOG, fault_frequency as kinematic_frequency
+from bearing_common.bearings import CATALOG
+from bearing_common.bearings import fault_frequency as kinematic_frequency
+
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 from bearing_common.states import FaultState
 
@@ -328,7 +330,7 @@ class FaultObserver:
     # ------------------------------------------------------------------------------------
     @classmethod
     def from_model_set(cls, set_name: str, fault_type: str, rpm: float | None = None,
-                       sample_rate: float | None = None, **kwargs) -> "FaultObserver":
+                       sample_rate: float | None = None, **kwargs) -> FaultObserver:
         """Observer for ``fault_type`` from the shipped model set ``set_name``."""
         models = load_model_set(set_name, sample_rate=sample_rate)
         return cls(models[fault_type], rpm=rpm, sample_rate=sample_rate, **kwargs)

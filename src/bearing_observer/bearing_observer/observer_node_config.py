@@ -1,7 +1,7 @@
 """Parameters and topics of the ``observer`` node (no rclpy)."""
 
-from bearing_common.states import FaultState, parse_fault
 from bearing_common.parameters import ParameterSpec, one_of, positive
+from bearing_common.states import FaultState, parse_fault
 
 FAULT_TYPES = ("outer_race", "inner_race")
 

@@ -39,12 +39,12 @@ class MonotonePiecewiseLinear:
         self._inverse_slopes = np.diff(x) / np.diff(y)
 
     @classmethod
-    def identity(cls, scale: float = 1.0) -> "MonotonePiecewiseLinear":
+    def identity(cls, scale: float = 1.0) -> MonotonePiecewiseLinear:
         """The map ``v -> v`` as two breakpoints at ``-scale`` and ``+scale``."""
         return cls([-scale, scale], [-scale, scale])
 
     @classmethod
-    def gain(cls, k: float) -> "MonotonePiecewiseLinear":
+    def gain(cls, k: float) -> MonotonePiecewiseLinear:
         """The map ``v -> k v`` (k > 0) as breakpoints at -1 and 1."""
         if not k > 0:
             raise ValueError(f"gain must be > 0, got {k}")
@@ -71,7 +71,7 @@ class MonotonePiecewiseLinear:
         return {"x": [float(v) for v in self.x], "y": [float(v) for v in self.y]}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "MonotonePiecewiseLinear":
+    def from_dict(cls, d: dict) -> MonotonePiecewiseLinear:
         return cls(d["x"], d["y"])
 
     def __repr__(self):

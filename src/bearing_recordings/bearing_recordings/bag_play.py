@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import sys
 import time
-from typing import Callable, Optional
+from collections.abc import Callable
 
 from bearing_common import topics
 
@@ -70,7 +70,7 @@ def select_connections(reader, names=None, namespace=None) -> list:
 
 
 def play(bag_dir, rate: float = 1.0, clock: bool = False, names=None, loop: bool = False,
-         delay: float = 1.0, namespace: Optional[str] = None, wait_for_subscribers: int = 0,
+         delay: float = 1.0, namespace: str | None = None, wait_for_subscribers: int = 0,
          log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)) -> dict:
     """Publish the recording; return the number of messages published per topic.
 

@@ -16,18 +16,18 @@ for the user.
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-import logging
 from pathlib import Path
-from typing import Iterator, Optional
 
 import numpy as np
 
 from bearing_common import topics
 from bearing_common.stamps import to_seconds
 
-from .bag_types import BagError, CUSTOM_BEARING, CUSTOM_NAMESPACE, project_typestore
+from .bag_types import CUSTOM_BEARING, CUSTOM_NAMESPACE, BagError, project_typestore
 from .recording import Recording
 
 LOG = logging.getLogger(__name__)
@@ -112,7 +112,7 @@ def iter_raw(reader, connections) -> Iterator[tuple]:
                        f"({exc.__class__.__name__}: {_one_line(exc)})") from None
 
 
-def find_topic(recorded, relative: str, namespace: Optional[str] = None) -> Optional[str]:
+def find_topic(recorded, relative: str, namespace: str | None = None) -> str | None:
     """The recorded name of graph topic ``relative`` among ``recorded`` names (None if absent).
 
     With ``namespace`` (e.g. ``"machine_3"`` or ``""`` for the root) the name must be
@@ -188,7 +188,7 @@ class BagContents:
     truth: list = field(default_factory=list)
 
     @property
-    def rpm(self) -> Optional[float]:
+    def rpm(self) -> float | None:
         """Median recorded shaft speed (rev/min), or None."""
         if not self.speeds:
             return None
@@ -217,13 +217,13 @@ def bag_storage(path) -> str:
     return str(_bag_info(path).get("storage_identifier", ""))
 
 
-def _custom(path, key: str) -> Optional[str]:
+def _custom(path, key: str) -> str | None:
     custom = _bag_info(path).get("custom_data") or {}
     value = custom.get(key) if isinstance(custom, dict) else None
     return None if value is None else str(value)
 
 
-def bag_namespace_hint(path) -> Optional[str]:
+def bag_namespace_hint(path) -> str | None:
     """The namespace ``bearing-bag`` stored in the bag's custom_data, if any."""
     return _custom(path, CUSTOM_NAMESPACE)
 
@@ -233,7 +233,7 @@ def bag_bearing(path) -> str:
     return _custom(path, CUSTOM_BEARING) or ""
 
 
-def read_bag(path, namespace: Optional[str] = None, vibration_topic: str = topics.VIBRATION.name) -> BagContents:
+def read_bag(path, namespace: str | None = None, vibration_topic: str = topics.VIBRATION.name) -> BagContents:
     """Decode the graph's recorded vibration, shaft speed and fault states.
 
     Parameters
@@ -358,7 +358,7 @@ def join_chunks(chunks: list) -> Stream:
     return Stream(np.concatenate(parts), rate, first.stamp, first.first_sample_index, first.source, gaps, dups)
 
 
-def truth_per_sample(truth: list, start_time: float, n: int, rate: float) -> Optional[np.ndarray]:
+def truth_per_sample(truth: list, start_time: float, n: int, rate: float) -> np.ndarray | None:
     """Per-sample true state from the recorded ``sim/truth`` changes (state from its onset on)."""
     if not truth:
         return None
@@ -369,7 +369,7 @@ def truth_per_sample(truth: list, start_time: float, n: int, rate: float) -> Opt
     return out
 
 
-def load_bag(path, channel: Optional[str] = None, namespace: Optional[str] = None) -> Recording:
+def load_bag(path, channel: str | None = None, namespace: str | None = None) -> Recording:
     """A rosbag2 recording of the graph as a :class:`~.recording.Recording` (``bearing-diagnose BAG_DIR``).
 
     ``channel`` is the relative VibrationChunk topic (default ``vibration/drive_end``).

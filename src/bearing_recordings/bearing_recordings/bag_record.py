@@ -13,7 +13,7 @@ from __future__ import annotations
 import signal
 import sys
 import time
-from typing import Callable, Optional
+from collections.abc import Callable
 
 from bearing_common import topics
 
@@ -36,7 +36,7 @@ def message_class(msgtype: str):
         raise BagError(f"message type {msgtype} is not importable here (is its package installed?)") from None
 
 
-def record(out, names=None, namespace: str = "", storage: str = "mcap", duration: Optional[float] = None,
+def record(out, names=None, namespace: str = "", storage: str = "mcap", duration: float | None = None,
            log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)) -> dict:
     """Record until SIGINT/SIGTERM or ``duration`` (s, wall time); return counts per topic.
 
@@ -64,7 +64,7 @@ def record(out, names=None, namespace: str = "", storage: str = "mcap", duration
             for name in wanted:
                 pending[topics.qualified(namespace, name)] = name
 
-            def subscribe(qualified: str, msgtype: str, spec: Optional[topics.Topic]):
+            def subscribe(qualified: str, msgtype: str, spec: topics.Topic | None):
                 if spec is not None:
                     bag.add_topic(qualified, msgtype, spec.latched, spec.depth)
                 else:

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 
@@ -33,8 +32,7 @@ DEFAULT_CHUNK_DURATION = 0.01
 def topic_qos(latched: bool, depth: int):
     """The rosbags ``Qos`` a topic is offered with (reliable; transient local if latched),
     as :func:`bearing_common.topics.qos` offers it live."""
-    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, QosReliability,
-                                    QosTime)
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
     zero = QosTime(0, 0)
     return Qos(QosHistory.KEEP_LAST, depth, QosReliability.RELIABLE,
                QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
@@ -108,7 +106,7 @@ class BagWriter:
             self._closed = True
             self._writer.close()
 
-    def __enter__(self) -> "BagWriter":
+    def __enter__(self) -> BagWriter:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -135,7 +133,7 @@ class Conversion:
 
 def recording_to_bag(rec: Recording, out, chunk_duration: float = DEFAULT_CHUNK_DURATION,
                      start_time: float = 0.0, storage: str = "mcap", namespace: str = "",
-                     max_duration: Optional[float] = None, resample_to: Optional[float] = None,
+                     max_duration: float | None = None, resample_to: float | None = None,
                      bearing: str = "") -> Conversion:
     """Write a recording into a bag as a sensor driver would have published it.
 

@@ -19,8 +19,8 @@ a one-signal file gives its signal; anything else is an error listing the variab
 
 from __future__ import annotations
 
-from pathlib import Path
 import re
+from pathlib import Path
 
 import numpy as np
 

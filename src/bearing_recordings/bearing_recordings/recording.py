@@ -6,8 +6,8 @@ Every loader returns a :class:`Recording` in SI units (m/s², Hz, rev/min, s) or
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 import math
+from dataclasses import dataclass
 
 import numpy as np
 

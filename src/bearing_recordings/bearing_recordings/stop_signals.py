@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import signal
-from typing import Optional
 
 
 class StopSignals:
     """True once SIGINT or SIGTERM arrived; the handlers are installed inside the ``with`` block."""
 
     def __init__(self):
-        self.signal: Optional[int] = None
+        self.signal: int | None = None
         self._old = {}
 
     def __enter__(self):

@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit
 
 from .model_parameters import P_OMD, P_OMI, P_OMO
-from .rotor_rhs import FASTMATH, rhs_into, rhs_trig, trig_at, NSTATE, WORK_LEN, NDOF
+from .rotor_rhs import FASTMATH, NDOF, NSTATE, WORK_LEN, rhs_into, rhs_trig, trig_at
 
 #: weight of (k4 - k5) in the error estimate: b5_hat of the embedded 3rd-order solution
 ERR_WEIGHT = 1.0 / 6.0

@@ -29,8 +29,8 @@ a kinematic defect fixed on the rotating inner ring (see
 (0.007 in wide, 0.002 in deep; the listing's IR size is 0, an assumption).
 """
 
-from dataclasses import dataclass, field
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 

@@ -16,12 +16,13 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 
 from bearing_common import topics
-from bearing_msgs.msg import FaultState as FaultStateMsg, ShaftSpeed, VibrationChunk
-
-from bearing_common.states import FaultState
 from bearing_common.node_main import run_node_main
-from bearing_common.stamps import to_stamp
 from bearing_common.parameters import declare
+from bearing_common.stamps import to_stamp
+from bearing_common.states import FaultState
+from bearing_msgs.msg import FaultState as FaultStateMsg
+from bearing_msgs.msg import ShaftSpeed, VibrationChunk
+
 from .sim_node_config import PARAMETERS, SOURCE, build_run, parse_wait_spec
 from .simulator import Simulator
 

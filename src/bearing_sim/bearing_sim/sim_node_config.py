@@ -8,6 +8,7 @@ into a validated SimulationConfig and schedule. Topic names and QoS come from
 from dataclasses import dataclass
 
 from bearing_common.parameters import ParameterSpec, positive
+
 from .schedule import parse_schedule, scenario
 from .simulator import SimulationConfig
 

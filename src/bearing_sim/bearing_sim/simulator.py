@@ -19,16 +19,23 @@ bit-identical whatever the chunk sizes passed to :meth:`Simulator.advance`.
 Memory is bounded (one 5 ms piece plus the FIR history).
 """
 
-from dataclasses import dataclass
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from .defects import inner_race_window, outer_race_window
 from bearing_common.states import FaultState
+
+from .defects import inner_race_window, outer_race_window
 from .integrator import STAT_REJECTS, STAT_RHS, STAT_STEPS, default_atol, integrate_interval
 from .model_parameters import (
-    DEFECT_DEPTH, DEFECT_WIDTH, M_PER_INCH, N_BALLS_DE, N_PER_LBF, VARIANTS, ModelParameters,
+    DEFECT_DEPTH,
+    DEFECT_WIDTH,
+    M_PER_INCH,
+    N_BALLS_DE,
+    N_PER_LBF,
+    VARIANTS,
+    ModelParameters,
 )
 from .resampling import design_lowpass, fine_factor, fir_decimate
 from .rotor_rhs import DOF_HOUSING_Y_DE, NDOF, NSTATE, rhs_py, static_equilibrium
