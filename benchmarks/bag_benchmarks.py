@@ -71,7 +71,7 @@ def _diagnose_speed(bag: pathlib.Path, label: str) -> list:
     t0 = time.perf_counter()
     rec = load_recording(bag)
     t_load = time.perf_counter() - t0
-    diagnose_recording(rec, quiet=True)
+    diagnose_recording(rec)
     t_all = time.perf_counter() - t0
     return [(f"bearing-diagnose BAG_DIR ({label}, {rec.duration:.1f} s signal)", round(rec.duration / t_all, 2),
              "x real time"),

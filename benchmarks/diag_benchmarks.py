@@ -36,7 +36,7 @@ def detection_delays(noise_density: float = 4.5e-3, rpm: float = 1800.0, method:
     rows = []
     for name in cases or THESIS_CASES:
         rec = simulate_case(name, rpm, noise_density)
-        res = diagnose_recording(rec, method=method, quiet=True)
+        res = diagnose_recording(rec, method=method)
         for r in score_case(res.segments, rec.truth, rec.sample_rate):
             tag = f"{method} {name} {r['state']}@{r['start']:.1f}s"
             if not r["detected"]:
@@ -87,7 +87,7 @@ def throughput(duration_s: float = 2.0, model_set: str = "sim_48k", fs: float = 
     rows.append((f"decision throughput ({model_set})", round(duration_s / cpu, 1), "x real time"))
     if with_observers:
         rec = Recording(y, fs, 1800.0, "simulator")
-        res = diagnose_recording(rec, model_set=model_set, quiet=True)
+        res = diagnose_recording(rec, model_set=model_set)
         rows.append((f"observers + decision throughput ({model_set})", round(duration_s / res.cpu_s, 1),
                      "x real time"))
     return rows
@@ -108,9 +108,9 @@ def block_contributions(noise_density: float = 4.5e-3, rpm: float = 1800.0, xcor
     normal_flag = {k: [0, 0] for k in counts}
     for name in cases or THESIS_CASES:
         rec = simulate_case(name, rpm, noise_density)
-        full = diagnose_recording(rec, quiet=True)
+        full = diagnose_recording(rec)
         cfar_cfg = replace(config_for(full.model_set), explain_away=False, explained_margin=10.0)
-        cfar = diagnose_recording(rec, quiet=True, config=cfar_cfg)
+        cfar = diagnose_recording(rec, config=cfar_cfg)
         _, nomodel = diagnose_measurement(rec.accel, rec.sample_rate, rpm, full.model_set)
         fs = full.sample_rate
         for d_full, d_cfar, d_nm in zip(full.decisions, cfar.decisions, nomodel):

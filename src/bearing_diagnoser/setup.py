@@ -14,13 +14,14 @@ setup(
     zip_safe=False,
     maintainer="bearing-monitor maintainers",
     maintainer_email="maintainers@bearing-monitor.invalid",
-    description="Fault decision from observer residuals (thesis 3.2) with onset times and confidence; diagnoser node, bearing-diagnose CLI and offline analysis.",
+    description="Fault decision from observer residuals (thesis 3.2) with onset times and confidence; "
+                "diagnoser node, bearing-diagnose and bearing-accuracy.",
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
             'diagnoser = bearing_diagnoser.node:main',
             'bearing-diagnose = bearing_diagnoser.diagnose_cli:main',
-            'bearing-cwru-report = bearing_diagnoser.cwru_report:main',
+            'bearing-accuracy = bearing_diagnoser.accuracy_cli:main',
         ],
     },
 )

@@ -121,7 +121,8 @@ def test_packages_depend_one_way():
         "bearing_common": set(),
         "bearing_recordings": {"bearing_common"},
         "bearing_sim": {"bearing_common"},
-        "bearing_observer": {"bearing_common", "bearing_recordings", "bearing_sim"},  # sim: bearing-identify --source sim
+        # bearing_sim: only for bearing-identify --source sim
+        "bearing_observer": {"bearing_common", "bearing_recordings", "bearing_sim"},
         "bearing_diagnoser": {"bearing_common", "bearing_recordings", "bearing_observer"},
         "bearing_bringup": set(PACKAGES),
     }

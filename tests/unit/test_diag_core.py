@@ -1,4 +1,4 @@
-"""Decision core on synthetic inputs with known answers (no simulator, no observer).
+"""Folding decision core (simulator model sets) on synthetic inputs with known answers (no simulator, no observer).
 
 Inputs: decaying-resonance bursts (3 kHz, 0.4 ms decay) at BPFO / BPFI in white sensor
 noise at the CWRU normal level (4.5e-3 (m/s²)/√Hz), pure noise, and aperiodic bursts.
@@ -13,8 +13,6 @@ import pytest
 from numpy.testing import assert_allclose
 
 from bearing_common.bearings import CATALOG, fault_frequency
-
-DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 from bearing_common.states import FaultState
 from bearing_diagnoser.bearing_lines import bearing_lines, decoy_frequencies
 from bearing_diagnoser.calibration import calibrate
@@ -30,8 +28,9 @@ from bearing_diagnoser.synthetic import burst_train, white_noise
 
 FS = 48000.0
 RPM = 1800.0
-BPFO = fault_frequency(DRIVE_END_6205, FaultState.OUTER_RACE, RPM)
-BPFI = fault_frequency(DRIVE_END_6205, FaultState.INNER_RACE, RPM)
+BEARING = CATALOG["6205"]
+BPFO = fault_frequency(BEARING, FaultState.OUTER_RACE, RPM)
+BPFI = fault_frequency(BEARING, FaultState.INNER_RACE, RPM)
 DENSITY = 4.5e-3
 O, I, N, U = FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.NORMAL, FaultState.UNKNOWN
 
@@ -50,9 +49,9 @@ def noise(duration, seed=1):
 def test_decoys_stay_clear_of_every_race_line():
     for window in (0.05, 0.2):
         for f in (BPFO, BPFI):
-            d = decoy_frequencies(f, RPM, 6, window)
+            d = decoy_frequencies(f, RPM, BEARING, 6, window)
             assert d.size == 6
-            race = bearing_lines(RPM, shaft=False, ball_cage=False)
+            race = bearing_lines(RPM, BEARING, shaft=False, ball_cage=False)
             for line in race:
                 assert np.all(np.abs(d / line - 1) > 0.05 + 0.5 / (line * window) - 1e-12)
 
@@ -86,11 +85,11 @@ def test_energy_envelope_is_chunk_invariant():
 
 def test_thresholds_are_derived_from_the_stated_false_alarm_rate():
     cfg = config_for("sim_48k")
-    loose = calibrate(replace(cfg, pfa=1e-2), FS, Diagnoser)
-    strict = calibrate(cfg, FS, Diagnoser)
-    assert 0.8 < strict["cfar_median"] < 1.2  # CFAR statistic ≈ 1 on noise
-    assert 1.0 < loose["threshold"] < strict["threshold"] < 5.0
-    assert strict == calibrate(cfg, FS, Diagnoser)  # deterministic
+    loose = calibrate(cfg.fold, 1e-2, FS, BEARING)
+    strict = calibrate(cfg.fold, cfg.pfa, FS, BEARING)
+    assert 0.8 < strict.cfar_median < 1.2  # CFAR statistic ≈ 1 on noise
+    assert 1.0 < loose.threshold < strict.threshold < 5.0
+    assert strict == calibrate(replace(cfg.fold), cfg.pfa, FS, BEARING)  # deterministic
 
 
 # ---------------------------------------------------------------------------------------

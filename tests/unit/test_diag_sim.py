@@ -27,7 +27,7 @@ NOISE = 4.5e-3  # (m/s²)/√Hz
 @functools.cache
 def _run(case: str, rpm: float, noise: float, method: str = "model"):
     rec = simulate_case(case, rpm, noise)
-    res = diagnose_recording(rec, method=method, quiet=True)
+    res = diagnose_recording(rec, method=method)
     return res, score_case(res.segments, rec.truth, rec.sample_rate)
 
 
@@ -85,7 +85,7 @@ def test_long_noisy_normal_stream_raises_no_alarm():
     d = simulate(SimulationConfig(rpm=1800, sample_rate=48000, noise_density=NOISE, seed=5),
                  [(FaultState.NORMAL, 3.0)])
     rec = Recording(np.asarray(d["accel"]), 48000.0, 1800.0, "simulator", np.asarray(d["truth"]))
-    res = diagnose_recording(rec, quiet=True)
+    res = diagnose_recording(rec)
     assert [s.state for s in res.segments] == [FaultState.NORMAL]
     assert sum(dd.label != FaultState.NORMAL for dd in res.decisions) <= 3
 

@@ -16,7 +16,7 @@ NOISE = 4.5e-3  # (m/s^2)/sqrt(Hz), the real CWRU normal record's level
                          ids=["1730-told-right", "1730-told-1.7%-high", "1800-told-1.7%-low"])
 def test_simulated_or_ir_across_loaded_speeds_and_wrong_speed(true_rpm, told_rpm):
     rec = simulate_case("or-ir", rpm=true_rpm, noise_density=NOISE)
-    result = diagnose_recording(rec, rpm=told_rpm, quiet=True)
+    result = diagnose_recording(rec, rpm=told_rpm)
     rows = score_case(result.segments, rec.truth, rec.sample_rate)
     assert [r["state"] for r in rows] == ["outer_race", "inner_race"]
     assert all(r["detected"] for r in rows), rows
@@ -29,6 +29,6 @@ def test_cwru_records_with_speed_told_wrong(cwru_record, name, expected, factor)
     rec = load_recording(cwru_record(name), sample_rate=12000.0)
     n = int(3.0 * rec.sample_rate)  # 3 s excerpt
     rec.accel = rec.accel[:n]
-    result = diagnose_recording(rec, rpm=rec.rpm * factor, quiet=True)
+    result = diagnose_recording(rec, rpm=rec.rpm * factor)
     share = sum(s.end - s.start for s in result.segments if s.state == expected) / (n / rec.sample_rate)
     assert share >= 0.9, [s.to_json() for s in result.segments]

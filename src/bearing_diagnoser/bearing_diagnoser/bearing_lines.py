@@ -13,13 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from bearing_common.bearings import CATALOG, shaft_hz
-from bearing_common.bearings import Bearing as BearingGeometry
-
-DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+from bearing_common.bearings import Bearing, shaft_hz
 
 
-def bearing_lines(rpm: float, geometry: BearingGeometry = DRIVE_END_6205,
+def bearing_lines(rpm: float, geometry: Bearing,
                   max_hz: float | None = None, shaft: bool = True,
                   ball_cage: bool = True) -> np.ndarray:
     """Every frequency (Hz) a healthy or faulty bearing may put a line at.
@@ -48,9 +45,9 @@ def bearing_lines(rpm: float, geometry: BearingGeometry = DRIVE_END_6205,
     return arr
 
 
-def decoy_frequencies(fault_hz: float, rpm: float, n_decoys: int = 6, window_s: float = 0.2,
-                      search: float = 0.03, slip: float = 0.02, span: tuple[float, float] = (0.3, 3.0),
-                      geometry: BearingGeometry = DRIVE_END_6205) -> np.ndarray:
+def decoy_frequencies(fault_hz: float, rpm: float, geometry: Bearing, n_decoys: int = 6, window_s: float = 0.2,
+                      search: float = 0.03, slip: float = 0.02,
+                      span: tuple[float, float] = (0.3, 3.0)) -> np.ndarray:
     """Pick ``n_decoys`` frequencies near ``fault_hz`` clear of every bearing line.
 
     Parameters
@@ -59,6 +56,8 @@ def decoy_frequencies(fault_hz: float, rpm: float, n_decoys: int = 6, window_s: 
         The hypothesis' fault frequency (BPFO or BPFI), Hz.
     rpm : float
         Shaft speed (rev/min) used to place the lines to avoid.
+    geometry : Bearing
+        The monitored bearing, whose lines are avoided.
     n_decoys : int
         How many decoys to return.
     window_s : float
@@ -77,8 +76,8 @@ def decoy_frequencies(fault_hz: float, rpm: float, n_decoys: int = 6, window_s: 
     avoided; shaft harmonics, then ball and cage lines, are dropped from the list only
     when too few decoys remain (short windows: with 0.05 s the shaft harmonics, 18 % of
     BPFI apart, leave no room; the simulator has no ball defect and no shaft lines in its
-    envelope other than the IR sidebands, which stay avoided).  Decoys are taken nearest to ``fault_hz`` first (same noise colour), at
-    least 3 % apart.  Returns an array of shape (n_decoys,), Hz, sorted.
+    envelope other than the IR sidebands, which stay avoided).  Decoys are taken nearest to
+    ``fault_hz`` first (same noise colour), at least 3 % apart.  Returns an array of shape (n_decoys,), Hz, sorted.
     """
     cand = fault_hz * np.geomspace(span[0], span[1], 1201)
     for with_shaft, with_ball in ((True, True), (False, True), (False, False)):

@@ -8,16 +8,22 @@ normal law to log(c) (the upper tail of log c is close to normal; the empirical 
 is used when the sample holds at least 10 exceedances) and returns the (1 − pfa)
 quantile.  The kurtosis threshold of the band-passed window is derived the same way.
 Both are per window and per hypothesis; the k-of-n hysteresis lowers the rate of state
-changes further (see :mod:`.diag_benchmarks` for measured false alarms per hour).
+changes further (``benchmarks/diag_benchmarks.py`` measures false alarms per hour).
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
 from scipy import stats
+
+from bearing_common.bearings import Bearing, fault_frequency
+
+from .fold_scores import HYPOTHESES, FoldScorer, FoldSettings
+from .periodicity import EnergyEnvelope
+from .window_buffer import StreamBlocks
 
 N_WINDOWS = 600  #: noise windows per calibration (per hypothesis)
 SEED = 20150101
@@ -32,38 +38,43 @@ def _tail_quantile(x: np.ndarray, pfa: float) -> float:
     return float(np.exp(lx.mean() + stats.norm.isf(pfa) * lx.std(ddof=1)))
 
 
+@dataclass(frozen=True)
+class Calibration:
+    """Thresholds of the folding front end and the noise statistics they came from."""
+
+    threshold: float  # CFAR periodicity
+    kurtosis_threshold: float
+    n_windows: int
+    cfar_median: float
+    cfar_p99: float
+    kurtosis_median: float
+
+
 @lru_cache(maxsize=32)
-def _calibrate(cfg, sample_rate: float, diagnoser_cls) -> dict:
-    from bearing_common.bearings import CATALOG, fault_frequency
-    DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
-    from bearing_common.states import FaultState
-    HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE)
-    c = replace(cfg, hop_s=cfg.window_s, threshold=2.0, kurtosis_threshold=1e9, k_of_n=(1, 1), rms_floor=0.0)
-    dg = diagnoser_cls(c, model_set="calibration")
-    dg.keep_history = False
+def _calibrate(settings: FoldSettings, pfa: float, sample_rate: float, bearing: Bearing) -> Calibration:
+    scorer = FoldScorer(settings, bearing, (2.0, 1e9))
+    streams = {h: StreamBlocks(EnergyEnvelope(sample_rate, settings.band)) for h in HYPOTHESES}
+    fault_hz = {h: fault_frequency(bearing, h, settings.nominal_rpm) for h in HYPOTHESES}
     rng = np.random.default_rng(SEED)
-    n = int(round((N_WINDOWS + 1) * cfg.window_s * sample_rate))
-    y = rng.standard_normal(n)
+    y = rng.standard_normal(int(round((N_WINDOWS + 1) * settings.window_s * sample_rate)))
+    for st in streams.values():
+        st.push(0, y, y, np.zeros_like(y))
+    env = next(iter(streams.values())).env
+    fe = env.envelope_rate
+    w = max(1, int(round(settings.window_s * fe)))
     cf, ku = [], []
-    chunk = int(sample_rate * 0.1)
-    for i in range(0, n, chunk):
-        for h in HYPOTHESES:
-            f = fault_frequency(DRIVE_END_6205, h, cfg.nominal_rpm)
-            for d in dg.update(h, i, sample_rate, y[i:i + chunk], None, None, f):
-                cf += [d.scores[f"{x.label}_cfar"] for x in HYPOTHESES]
-                ku.append(d.scores["kurtosis"])
+    for b0 in range(0, min(st.n_blocks for st in streams.values()) - w + 1, w):
+        wins = {h: st.window(b0, b0 + w) for h, st in streams.items()}
+        scores = scorer.scores(wins, fault_hz, dict.fromkeys(HYPOTHESES, False), env.decimation, b0, fe)
+        cf += [scores[f"{h.label}_cfar"] for h in HYPOTHESES]
+        ku.append(scores["kurtosis"])
     cf, ku = np.asarray(cf), np.asarray(ku)
-    return {"threshold": _tail_quantile(cf, cfg.pfa), "kurtosis_threshold": _tail_quantile(ku, cfg.pfa),
-            "n_windows": int(ku.size), "cfar_median": float(np.median(cf)),
-            "cfar_p99": float(np.quantile(cf, 0.99)), "kurtosis_median": float(np.median(ku))}
+    return Calibration(_tail_quantile(cf, pfa), _tail_quantile(ku, pfa), int(ku.size), float(np.median(cf)),
+                       float(np.quantile(cf, 0.99)), float(np.median(ku)))
 
 
-def calibrate(cfg, sample_rate: float, diagnoser_cls) -> dict:
-    """Thresholds for ``cfg`` at ``sample_rate`` (Hz) from ``cfg.pfa`` on white noise.
-
-    Returns a dict: ``threshold`` (CFAR periodicity), ``kurtosis_threshold``,
-    ``n_windows`` used, and the noise medians / 99 % points for documentation.
-    Deterministic (fixed seed); cached per (configuration, rate).
-    """
-    key = replace(cfg, threshold=None, kurtosis_threshold=None)
-    return dict(_calibrate(key, float(sample_rate), diagnoser_cls))
+def calibrate(settings: FoldSettings, pfa: float, sample_rate: float, bearing: Bearing) -> Calibration:
+    """Thresholds of ``settings`` at ``sample_rate`` (Hz) for false-alarm probability ``pfa``
+    per window and hypothesis on white noise. Deterministic (fixed seed); cached."""
+    key = replace(settings, threshold=None, kurtosis_threshold=None)
+    return _calibrate(key, float(pfa), float(sample_rate), bearing)

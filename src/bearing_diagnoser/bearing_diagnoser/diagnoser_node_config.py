@@ -1,39 +1,38 @@
-"""Parameters and /diagnostics contents of the ``diagnoser`` node (no rclpy)."""
+"""Parameters of the ``diagnoser`` node and the levels of its /diagnostics status (no rclpy)."""
 
-from bearing_common.parameters import ParameterSpec, positive
+from bearing_common.bearings import DEFAULT_BEARING
+from bearing_common.parameters import ParameterSpec, bearing_check, non_negative, positive
 from bearing_common.states import FaultState
 
 PARAMETERS = (
-    ParameterSpec("model_set", "", "decision defaults of this model set (window, band, thresholds); "
-                  "empty = the model set named in the residual messages"),
-    ParameterSpec("window", 0.0, "sliding window length (s); 0 = the model set's default",
-                  lambda v: None if v >= 0 else "must be >= 0"),
-    ParameterSpec("hop", 0.0, "window hop (s); 0 = the model set's default",
-                  lambda v: None if v >= 0 else "must be >= 0"),
-    ParameterSpec("false_alarm_probability", 0.0, "per-window false-alarm probability on noise that sets the "
-                  "detection thresholds; 0 = the model set's default", lambda v: None if 0 <= v < 0.5 else "must be in [0, 0.5)"),
-    ParameterSpec("stale_timeout", 1.0, "seconds without residuals before /diagnostics reports STALE", positive),
+    ParameterSpec("bearing", DEFAULT_BEARING, "monitored bearing: catalog name (6205, 6203, mfpt, za2115), "
+                  "a YAML file, or 'N,d,D,angle' with units", bearing_check, dynamic=True),
+    ParameterSpec("model_set", "", "decision defaults of this model set; empty = the model set named in the "
+                  "residual messages", dynamic=True),
+    ParameterSpec("rpm", 0.0, "nominal shaft speed (rev/min) used while no shaft_speed arrives, refined from the "
+                  "vibration within rpm_tolerance; 0 = unknown: estimated from the vibration (unreliable)",
+                  non_negative, dynamic=True),
+    ParameterSpec("rpm_tolerance", 0.05, "relative tolerance of the rpm parameter (an induction motor runs up to "
+                  "about 4 % off its nameplate speed between no load and full load)",
+                  lambda v: None if 0.0 < v < 0.5 else "must be in (0, 0.5)", dynamic=True),
+    ParameterSpec("window", 0.0, "analysis window (s); 0 = derived: 4 cage periods of the bearing (real "
+                  "machines), the model set's default (simulator)", non_negative, dynamic=True),
+    ParameterSpec("false_alarm_probability", 0.0, "false-alarm probability per window on Gaussian noise that "
+                  "sets the detection thresholds; 0 = the model set's default (1e-4)",
+                  lambda v: None if 0 <= v < 0.5 else "must be in [0, 0.5)", dynamic=True),
+    ParameterSpec("sensor_bandwidth", 0.0, "usable bandwidth of the sensor chain (Hz); 0 = up to 0.45 x the "
+                  "sample rate", non_negative, dynamic=True),
+    ParameterSpec("stale_timeout", 1.0, "seconds without residuals before /diagnostics reports STALE", positive,
+                  dynamic=True),
     ParameterSpec("diagnostics_period", 1.0, "seconds between /diagnostics messages", positive),
 )
+
+#: Parameters whose change restarts the decision (new windows, thresholds or hypotheses).
+RESTART_ON = ("bearing", "model_set", "rpm", "rpm_tolerance", "window", "false_alarm_probability",
+              "sensor_bandwidth")
 
 # diagnostic_msgs/DiagnosticStatus levels (OK=0, WARN=1, ERROR=2, STALE=3) per published state.
 LEVEL_OK, LEVEL_WARN, LEVEL_ERROR, LEVEL_STALE = 0, 1, 2, 3
 STATE_LEVEL = {FaultState.NORMAL: LEVEL_OK, FaultState.OUTER_RACE: LEVEL_ERROR,
                FaultState.INNER_RACE: LEVEL_ERROR, FaultState.BALL: LEVEL_ERROR,
                FaultState.UNKNOWN: LEVEL_WARN}
-
-
-def health(state, silent: list, all_silent: bool) -> tuple:
-    """(level, message) of the diagnoser's DiagnosticStatus.
-
-    ``silent``: residual topics not heard from within the stale timeout;
-    ``all_silent``: nothing heard at all within it (STALE).
-    """
-    if all_silent:
-        return LEVEL_STALE, "no residuals: " + ", ".join(silent)
-    level = STATE_LEVEL[FaultState(state)]
-    message = FaultState(state).name
-    if silent:
-        level = max(level, LEVEL_WARN)
-        message += " (waiting for " + ", ".join(silent) + ")"
-    return level, message

@@ -1,17 +1,16 @@
 """The ``diagnoser`` node: fault states from the two observers' residuals.
 
-Subscribes ``residual/outer_race`` and ``residual/inner_race`` (and
-``shaft_speed`` for the health report); publishes ``fault_state`` (FaultState,
-reliable + transient local: a late subscriber sees the current state) on every
-decision, and ``/diagnostics`` (OK for NORMAL, ERROR for a fault, WARN for
-UNKNOWN or a silent observer, STALE when no residual arrives). Signal timing
-comes from the residuals' stamps and sample indices only, so replays at any
-rate (with ``use_sim_time``) give the same decisions.
+Subscribes ``residual/outer_race``, ``residual/inner_race`` and ``shaft_speed``; publishes
+``fault_state`` (FaultState, reliable + transient local: a late subscriber sees the current
+state) on every decision, and ``/diagnostics`` (OK NORMAL, ERROR a fault, WARN UNKNOWN, a
+silent observer or an unusable sensor signal, STALE no input; a last STALE "stopped" when
+the node ends). Signal timing comes from the residuals' stamps and sample indices only, so
+replays at any rate (with ``use_sim_time``) give the same decisions. The logic lives in
+:class:`.session.DiagnoserSession`; this module only wires ROS to it.
 """
 
 import sys
 
-import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
 
@@ -22,134 +21,76 @@ from bearing_common.stamps import to_seconds, to_stamp
 from bearing_common.states import FaultState
 from bearing_msgs.msg import FaultState as FaultStateMsg
 from bearing_msgs.msg import Residual, ShaftSpeed
-from bearing_observer.chunk_stream import ChunkStream
-from bearing_observer.hw_model import DEFAULT_SETS
 
-from .decision import Diagnoser, config_for
-from .diagnoser_node_config import PARAMETERS, health
+from .diagnoser_node_config import PARAMETERS
+from .session import DiagnoserSession, Health, StateReport
 
 WARN_PERIOD_S = 5.0
 
 
 class DiagnoserNode(Node):
-    """Thin adapter: Residual chunks -> Diagnoser.update -> FaultState and /diagnostics."""
+    """Thin adapter: Residual chunks -> DiagnoserSession -> FaultState and /diagnostics."""
 
     def __init__(self):
         super().__init__("diagnoser")
-        self.values = declare(self, PARAMETERS)
-        self.core = None
-        self.core_streams = set()  # hypotheses that have fed the current core (a restart of either starts a new one)
-        self.time_offset = None  # stamp of sample index 0 (s)
-        self.streams = {h: ChunkStream(topic.name) for h, topic in topics.RESIDUALS.items()}
-        self.last_heard = {h: None for h in topics.RESIDUALS}
-        self.last_decision = None
-        self.shaft_speed = None
-        self.warm_thresholds()  # before subscribing: being subscribed means being ready
+        self.values = declare(self, PARAMETERS, on_change=lambda changed: self.session.configure(changed))
+        self.session = DiagnoserSession(self.values, self._log)
         self.pub_state = self.create_publisher(FaultStateMsg, topics.FAULT_STATE.name, topics.qos(topics.FAULT_STATE))
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
         for h, topic in topics.RESIDUALS.items():
             self.create_subscription(Residual, topic.name, lambda msg, h=h: self.on_residual(h, msg), topics.qos(topic))
-        self.create_subscription(ShaftSpeed, topics.SHAFT_SPEED.name, self.on_speed, topics.qos(topics.SHAFT_SPEED))
+        self.create_subscription(ShaftSpeed, topics.SHAFT_SPEED.name, lambda msg: self.session.on_speed(
+            msg.angular_velocity), topics.qos(topics.SHAFT_SPEED))
         self.create_timer(float(self.values["diagnostics_period"]), self.publish_diagnostics)
 
-    def warm_thresholds(self) -> None:
-        """Derive the thresholds of every model set this node may meet (about 1 s each)."""
-        for (_, rate), name in DEFAULT_SETS.items():
-            if self.values["model_set"] in ("", name):
-                Diagnoser(self._config(name), model_set=name, sample_rate=rate).thresholds()
+    def _log(self, level: str, text: str) -> None:
+        logger = self.get_logger()
+        if level == "warn":
+            logger.warn(text, throttle_duration_sec=WARN_PERIOD_S)
+        else:
+            logger.info(text)
 
-    def _config(self, name: str):
-        overrides = {}
-        if self.values["false_alarm_probability"] > 0:
-            overrides["pfa"] = float(self.values["false_alarm_probability"])
-        if self.values["window"] > 0:
-            overrides["window_s"] = float(self.values["window"])
-        if self.values["hop"] > 0:
-            overrides["hop_s"] = float(self.values["hop"])
-        return config_for(name, **overrides)
-
-    def _make_core(self, model_set: str, sample_rate: float) -> Diagnoser:
-        name = self.values["model_set"] or model_set
-        core = Diagnoser(self._config(name), model_set=name, sample_rate=sample_rate)
-        core.keep_history = False
-        cfg = core.config
-        threshold, kurtosis_threshold = core.thresholds()  # cached by warm_thresholds for the default sets
-        self.get_logger().info(f"deciding with {name} defaults: window {cfg.window_s:g} s, hop {cfg.hop_s:g} s, "
-                               f"false-alarm probability {cfg.pfa:g} per window -> periodicity threshold "
-                               f"{threshold:.3g}, kurtosis threshold {kurtosis_threshold:.3g}")
-        return core
-
-    def on_speed(self, msg: ShaftSpeed) -> None:
-        self.shaft_speed = msg.angular_velocity
+    def _now(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
 
     def on_residual(self, hypothesis: FaultState, msg: Residual) -> None:
-        self.last_heard[hypothesis] = self.get_clock().now()
-        r = np.asarray(msg.residual, dtype=float)
-        stamp = to_seconds(msg.header.stamp)
-        verdict = self.streams[hypothesis].check(stamp, msg.first_sample_index, msg.sample_rate, r)
-        if verdict.accepted and not (len(msg.estimate) == len(msg.impulse_train) == len(r)):
-            verdict = None
-        if not verdict or not verdict.accepted:
-            self.get_logger().warn(f"rejected residual chunk: {verdict.reason if verdict else 'array lengths differ'}",
-                                   throttle_duration_sec=WARN_PERIOD_S)
-            return
-        if self.core is None or (verdict.restart and hypothesis in self.core_streams):
-            if self.core is not None:
-                self.get_logger().info(f"{verdict.reason}; restarting the decision")
-            self.core = self._make_core(msg.model_set, msg.sample_rate)
-            self.core_streams = set()
-            self.time_offset = stamp - msg.first_sample_index / msg.sample_rate
-        self.core_streams.add(hypothesis)
-        try:
-            decisions = self.core.update(hypothesis, msg.first_sample_index, msg.sample_rate, r,
-                                         np.asarray(msg.estimate), np.asarray(msg.impulse_train), msg.fault_frequency)
-        except ValueError as exc:
-            self.streams[hypothesis].counts["rejected by decision"] += 1
-            self.get_logger().warn(f"rejected residual chunk: {exc}", throttle_duration_sec=WARN_PERIOD_S)
-            return
-        for decision in decisions:
-            self.publish_state(decision)
+        reports = self.session.on_residual(hypothesis, to_seconds(msg.header.stamp), msg.first_sample_index,
+                                           msg.sample_rate, msg.residual, msg.estimate, msg.impulse_train,
+                                           msg.fault_frequency, msg.model_set, self._now())
+        for report in reports:
+            self.publish_state(report)
 
-    def publish_state(self, decision) -> None:
-        msg = FaultStateMsg(state=int(decision.state), confidence=float(decision.confidence),
-                            model_set=self.core.model_set, detail=decision.detail)
-        msg.header.stamp = to_stamp(self.time_offset + decision.time)
-        msg.onset = to_stamp(self.time_offset + decision.onset)
-        msg.hypotheses = list(decision.scores)
-        msg.scores = [float(v) for v in decision.scores.values()]
+    def publish_state(self, report: StateReport) -> None:
+        msg = FaultStateMsg(state=int(report.state), confidence=float(report.confidence),
+                            model_set=report.model_set, detail=report.detail)
+        msg.header.stamp = to_stamp(report.stamp)
+        msg.onset = to_stamp(report.onset)
+        msg.hypotheses = list(report.scores)
+        msg.scores = [float(v) for v in report.scores.values()]
         self.pub_state.publish(msg)
-        if decision.changed:
-            self.get_logger().info(f"t={self.time_offset + decision.time:.3f} s  state {decision.state.name} "
-                                   f"(confidence {decision.confidence:.2f}, onset "
-                                   f"{self.time_offset + decision.onset:.3f} s)")
-        self.last_decision = decision
+        if report.changed:
+            self.get_logger().info(f"t={report.stamp:.3f} s  state {report.state.name} "
+                                   f"(confidence {report.confidence:.2f}, onset {report.onset:.3f} s)")
+
+    def _publish_health(self, health: Health) -> None:
+        status = DiagnosticStatus(level=bytes([health.level]), name=f"{self.get_fully_qualified_name()}: "
+                                  "drive_end bearing", message=health.message, hardware_id="drive_end")
+        status.values = [KeyValue(key=k, value=str(v)) for k, v in health.values.items()]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self.pub_diag.publish(array)
 
     def publish_diagnostics(self) -> None:
-        now = self.get_clock().now()
-        timeout = float(self.values["stale_timeout"])
-        silent = [topics.RESIDUALS[h].name for h, t in self.last_heard.items()
-                  if t is None or (now - t).nanoseconds * 1e-9 > timeout]
-        state = self.last_decision.state if self.last_decision else FaultState.NORMAL
-        level, message = health(state, silent, len(silent) == len(topics.RESIDUALS))
-        status = DiagnosticStatus(level=bytes([level]), name=f"{self.get_name()}: bearing drive_end",
-                                  message=message, hardware_id="drive_end")
-        values = {"state": FaultState(state).name}
-        if self.last_decision is not None:
-            values["confidence"] = f"{self.last_decision.confidence:.3f}"
-            values["onset (s)"] = f"{self.time_offset + self.last_decision.onset:.4f}"
-            values.update({k: f"{v:.4g}" for k, v in self.last_decision.scores.items()})
-        if self.shaft_speed is not None:
-            values["shaft speed (rad/s)"] = f"{self.shaft_speed:.3f}"
-        for h, stream in self.streams.items():
-            values[f"{topics.RESIDUALS[h].name} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
-        status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = now.to_msg()
-        self.pub_diag.publish(array)
+        self._publish_health(self.session.health(self._now()))
+
+    def shutdown(self) -> None:
+        """Called by the node main while the context is still valid: a last status."""
+        self._publish_health(self.session.final_health(self._now()))
 
 
 def main(args=None) -> int:
     return run_node_main("diagnoser", DiagnoserNode, None, args)
+
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -1,127 +1,63 @@
-"""Offline diagnosis of a recording: resample, run the observers chunk by chunk as live, decide, segment.
+"""Offline diagnosis of a recording, exactly as the live graph would: observers chunk by chunk, decide, segment.
 
-``diagnose_recording`` is what ``bearing-diagnose`` runs.  The pipeline is the live
-one: the OR and IR observers (``bearing_observer.observer.FaultObserver``) process
-fixed-size chunks and the incremental :class:`.decision.Diagnoser` consumes their
-residual / estimate / impulse-train arrays.  ``method="envelope"`` replaces the observers
-by the measurement itself and the folding statistic by the squared envelope spectrum
-(:mod:`.envelope_method`), the classical reference.
+:func:`diagnose_recording` is what ``bearing-diagnose`` runs. The OR and IR observers
+(:class:`bearing_observer.observer.FaultObserver`) process fixed-size chunks and the
+incremental :class:`.decision.Diagnoser` consumes their residual / estimate / train arrays.
+Without an identified model set (model set ``none``) the measurement goes straight to the
+decision (the observers would pass it through). ``method="envelope"`` runs the textbook
+squared-envelope-spectrum reference on the measurement instead
+(:func:`.decision_config.envelope_baseline`).
+
+What the run assumed (model set, resampling, speed) is logged (``logging``, logger
+``bearing_diagnoser.offline``); ``bearing-diagnose`` prints it on stderr.
 """
 
 from __future__ import annotations
 
-import sys
+import logging
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from bearing_common.bearings import CATALOG, fault_frequency
-
-DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
-from bearing_common.states import FaultState
+from bearing_common.bearings import Bearing, fault_frequency, load_bearing
 from bearing_recordings.recording import InputError, Recording
 from bearing_recordings.resampling import resample
 
-from .decision import HYPOTHESES, Decision, Diagnoser, config_for
+from .decision import STREAMS, Diagnoser
+from .decision_config import NO_MODEL, DiagnoserConfig, config_for, envelope_baseline
+from .segments import Segment, is_sensor_problem, segments_from_decisions
+from .spectral_engine import check_resolvable
+from .state_tracker import Decision
 
-#: Model-set rates (Hz) and sources; mirrors bearing_observer.hw_model.DEFAULT_SETS.
-MODEL_SETS = {"sim_48k": ("simulator", 48000.0), "sim_12k": ("simulator", 12000.0),
-              "cwru_de_6205": ("cwru", 12000.0)}
+LOG = logging.getLogger(__name__)
 
 #: Chunk length (s) fed to the observers, as the simulator node publishes (0.01 s).
 CHUNK_S = 0.01
 
+#: Model sets the offline run knows: name -> (source it was identified on, sample rate Hz, bearing).
+MODEL_SETS = {"sim_48k": ("simulator", 48000.0, "6205"), "sim_12k": ("simulator", 12000.0, "6205"),
+              "cwru_de_6205": ("cwru", 12000.0, "6205"), NO_MODEL: ("", 0.0, "")}
 
-def _log(msg: str, quiet: bool = False):
-    if not quiet:
-        print(f"bearing-diagnose: {msg}", file=sys.stderr)
-
-
-def model_set_rate(name: str) -> float:
-    """Sample rate (Hz) of a model set (from bearing_observer when it knows the set)."""
-    try:
-        from bearing_observer.hw_model import DEFAULT_SETS
-        for (_src, rate), set_name in DEFAULT_SETS.items():
-            if set_name == name:
-                return float(rate)
-    except ImportError:
-        pass
-    if name in MODEL_SETS:
-        return MODEL_SETS[name][1]
-    raise InputError(f"unknown model set {name!r}; known: {', '.join(MODEL_SETS)}")
+METHODS = ("model", "envelope")
 
 
-def choose_model_set(rec: Recording, requested: str | None = None) -> str:
-    """The model set for ``rec``: ``requested`` if given, else by source and rate.
+def choose_model_set(rec: Recording, bearing: Bearing, requested: str | None = None) -> str:
+    """The model set for ``rec``: ``requested`` if given, else by source, rate and bearing.
 
-    Simulator output → ``sim_48k`` (``sim_12k`` if recorded at or below 12 kHz);
-    CWRU recordings → ``cwru_de_6205``; bags → by the source they carry.
+    Simulator output → ``sim_48k`` (``sim_12k`` at or below 12 kHz); CWRU drive-end 6205
+    recordings → ``cwru_de_6205``; anything else (another rig, another bearing, a user's
+    sensor) → ``none``: no identified model, the measurement is decided on directly.
     """
     if requested:
-        model_set_rate(requested)  # validates the name
+        if requested not in MODEL_SETS:
+            raise InputError(f"unknown model set {requested!r}; known: {', '.join(MODEL_SETS)}")
         return requested
-    if rec.source == "cwru":
+    if rec.source == "simulator":
+        return "sim_12k" if rec.sample_rate <= 12000.0 else "sim_48k"
+    if rec.source == "cwru" and bearing == load_bearing("6205"):
         return "cwru_de_6205"
-    return "sim_12k" if rec.sample_rate <= 12000.0 else "sim_48k"
-
-
-@dataclass
-class Segment:
-    """A maximal run of one state (times in s from the data start)."""
-
-    start: float
-    end: float
-    state: FaultState
-    confidence: float
-    detected_at: float
-    scores: dict = field(default_factory=dict)
-    model_set: str = ""
-
-    def to_json(self) -> dict:
-        """The contract's JSON object."""
-        return {"start": round(self.start, 6), "end": round(self.end, 6), "state": self.state.label,
-                "confidence": round(float(np.clip(self.confidence, 0, 1)), 4),
-                "detected_at": round(self.detected_at, 6),
-                "scores": {k: round(float(v), 4) for k, v in self.scores.items() if np.isfinite(v)},
-                "model_set": self.model_set}
-
-
-#: Scores summarised per segment (median over the segment's windows).
-SEGMENT_SCORE_KEYS = ("outer_race", "inner_race", "outer_race_explained", "inner_race_explained",
-                      "outer_race_xcorr", "inner_race_xcorr", "kurtosis")
-
-
-def segments_from_decisions(decisions: list[Decision], duration: float, model_set: str) -> list[Segment]:
-    """Maximal runs of the published state; start = estimated onset, end = next onset."""
-    segs: list[Segment] = []
-    if not decisions:
-        return segs
-    first = decisions[0]
-    segs.append(Segment(0.0, duration, first.state, 0.0, first.time, {}, model_set))
-    members: list[list[Decision]] = [[]]
-    for d in decisions:
-        if d.changed:
-            onset = max(0.0, d.onset)
-            while segs and onset <= segs[-1].start + 1e-12 and len(segs) > 1:
-                segs.pop()
-                members.pop()
-            if len(segs) == 1 and onset <= 1e-12:
-                segs[0] = Segment(0.0, duration, d.state, 0.0, d.time, {}, model_set)
-                members[0] = []
-            else:
-                segs[-1].end = onset
-                segs.append(Segment(onset, duration, d.state, 0.0, d.time, {}, model_set))
-                members.append([])
-        members[-1].append(d)
-    for s, ms in zip(segs, members):
-        conf = [d.confidence for d in ms]
-        s.confidence = float(np.mean(conf)) if conf else 0.0
-        for k in SEGMENT_SCORE_KEYS:
-            v = [d.scores[k] for d in ms if k in d.scores and np.isfinite(d.scores[k])]
-            if v:
-                s.scores[k] = float(np.median(v))
-    return segs
+    return NO_MODEL
 
 
 @dataclass
@@ -132,26 +68,36 @@ class OfflineResult:
     decisions: list[Decision]
     model_set: str
     sample_rate: float
-    rpm: float
+    rpm: float | None
     accel: np.ndarray
     truth: np.ndarray | None
     streams: dict = field(default_factory=dict)  # hypothesis label -> dict of arrays (for plots)
     cpu_s: float = 0.0
     method: str = "model"
+    sensor_problems: list = field(default_factory=list)  # (start s, end s, problem)
 
 
-def _observers(model_set: str, rpm: float, fs: float):
+def _observers(model_set: str, rpm: float, fs: float, bearing: Bearing):
     try:
         from bearing_observer.observer import FaultObserver
     except ImportError as exc:
         raise InputError(f"the observer core (bearing_observer.observer) is not available ({exc}); "
-                         "use --method envelope") from None
-    return {h: FaultObserver.from_model_set(model_set, h.label, rpm, fs) for h in HYPOTHESES}
+                         "use --method envelope or --model-set none") from None
+    return {h: FaultObserver.from_model_set(model_set, h.label, rpm, fs) for h in STREAMS}
+
+
+def _speed(rec: Recording, rpm: float | None) -> float | None:
+    speed = rpm or rec.rpm
+    if speed is None:
+        LOG.warning("no shaft speed given; estimating it from the vibration (the 1x line) — unreliable "
+                    "without a prior, give --rpm")
+    return speed
 
 
 def diagnose_recording(rec: Recording, model_set: str | None = None, method: str = "model",
-                       rpm: float | None = None, config=None, quiet: bool = False,
-                       keep_streams: bool = False, chunk_s: float = CHUNK_S) -> OfflineResult:
+                       rpm: float | None = None, bearing: Bearing | str | None = None,
+                       config: DiagnoserConfig | None = None, keep_streams: bool = False,
+                       chunk_s: float = CHUNK_S) -> OfflineResult:
     """Diagnose a whole recording offline, exactly as the live graph would.
 
     Parameters
@@ -161,82 +107,104 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     model_set : str, optional
         Override the automatic choice (:func:`choose_model_set`).
     method : ``"model"`` or ``"envelope"``
-        Observers + folding/CFAR decision, or the squared-envelope-spectrum reference.
+        The decision with the observers (default), or the textbook envelope reference.
     rpm : float, optional
-        Shaft speed (rev/min); default the recording's, else the model set's nominal.
+        Shaft speed (rev/min); default the recording's, else estimated from the vibration.
+    bearing : Bearing or str, optional
+        The monitored bearing (default: the one stored with the recording, else the 6205).
     config : DiagnoserConfig, optional
         Decision parameters (default: the model set's).
     keep_streams : bool
         Keep full residual / estimate / train arrays for figures.
 
-    Stderr says which model set is used and whether the data were resampled.
+    Raises InputError (one line) when the recording cannot be diagnosed: a sample rate too
+    low for the bearing's fault lines, a record shorter than one analysis window, a signal
+    that is a sensor problem throughout.
     """
-    if method not in ("model", "envelope"):
-        raise InputError(f"unknown method {method!r}; expected model or envelope")
-    ms = choose_model_set(rec, model_set)
-    _log(f"model set {ms}" + (" (chosen from the input)" if not model_set else ""), quiet)
-    fs = model_set_rate(ms)
+    if method not in METHODS:
+        raise InputError(f"unknown method {method!r}; expected {' or '.join(METHODS)}")
+    bearing = load_bearing(bearing or rec.bearing or None)
+    ms = choose_model_set(rec, bearing, model_set)
+    LOG.info("model set %s%s; bearing %s", ms, "" if model_set else " (chosen from the input)", bearing.name)
+    fs = MODEL_SETS[ms][1] or rec.sample_rate
     x = rec.accel
     if abs(rec.sample_rate - fs) > 1e-9 * fs:
-        _log(f"resampling {rec.sample_rate:g} Hz -> {fs:g} Hz (anti-aliased, resample_poly) for model set {ms}",
-             quiet)
+        LOG.info("resampling %g Hz -> %g Hz (anti-aliased, resample_poly) for model set %s", rec.sample_rate, fs, ms)
         x = resample(x, rec.sample_rate, fs)
     truth = rec.truth
     if truth is not None and truth.size != x.size:
-        idx = np.minimum((np.arange(x.size) * rec.sample_rate / fs).astype(int), truth.size - 1)
-        truth = truth[idx]
-    if x.size < 2:
-        raise InputError("too few samples to diagnose")
+        truth = truth[np.minimum((np.arange(x.size) * rec.sample_rate / fs).astype(int), truth.size - 1)]
     cfg = config or config_for(ms)
-    speed = rpm or rec.rpm or cfg.nominal_rpm
-    if rec.rpm is None and rpm is None:
-        _log(f"no shaft speed in the input; assuming {speed:g} rpm (give --rpm)", quiet)
-    if x.size < cfg.window_s * fs:
-        raise InputError(f"recording too short: {x.size / fs:.3f} s < one {cfg.window_s} s window")
-    t0 = time.process_time()
-    n = x.size
-    chunk = max(1, int(round(chunk_s * fs)))
-    streams: dict = {}
     if method == "envelope":
-        from .envelope_method import EnvelopeDiagnoser
-        dg = EnvelopeDiagnoser(cfg, ms)
-        decisions = dg.run(x, fs, speed, chunk)
-    else:
-        dg = Diagnoser(cfg, ms)
-        obs = _observers(ms, speed, fs)
-        keep = {h: {"residual": [], "estimate": [], "impulse_train": []} for h in HYPOTHESES} if keep_streams else None
-        decisions = []
-        for i in range(0, n, chunk):
-            y = x[i:i + chunk]
-            for h, ob in obs.items():
-                out = ob.process(y)
-                decisions += dg.update(h, i, fs, out.residual, out.estimate, out.impulse_train, ob.fault_frequency)
-                if keep is not None:
-                    for k in keep[h]:
-                        keep[h][k].append(np.asarray(getattr(out, k), float))
-        decisions += dg.flush()
-        if keep is not None:
-            streams = {h.label: {k: np.concatenate(v) for k, v in d.items()} for h, d in keep.items()}
-            for h in HYPOTHESES:
-                streams[h.label]["fault_frequency"] = obs[h].fault_frequency
-    cpu = time.process_time() - t0
-    segs = segments_from_decisions(decisions, n / fs, ms)
-    return OfflineResult(segs, decisions, ms, fs, speed, x, truth, streams, cpu, method)
-
-
-def diagnose_measurement(y: np.ndarray, fs: float, rpm: float, model_set: str = "sim_48k", config=None,
-                         chunk_s: float = CHUNK_S) -> tuple[list[Segment], list[Decision]]:
-    """Decision core on a measurement alone (no observer: y fed as the residual, ŷ = 0).
-
-    This is the "observer without train, L = 0" front end of diagnosis-notes.md; used to
-    test the decision core and for data without a model set.
-    """
-    dg = Diagnoser(config or config_for(model_set), model_set)
+        cfg = envelope_baseline(cfg)
+    speed = _speed(rec, rpm)
+    _check(cfg, fs, bearing, speed, x.size / fs)
+    dg = Diagnoser(cfg, ms, bearing, fs)
+    dg.tell_speed(speed)
+    nominal = speed or cfg.fold.nominal_rpm
+    observed = method == "model" and ms != NO_MODEL
+    feeds = STREAMS if observed or cfg.method == "fold" else STREAMS[:1]  # one measurement suffices
+    fault_hz = {h: fault_frequency(bearing, h, nominal) for h in STREAMS}
+    obs = _observers(ms, nominal, fs, bearing) if observed else {}
+    keep = {h: {"residual": [], "estimate": [], "impulse_train": []} for h in obs} if keep_streams else {}
     chunk = max(1, int(round(chunk_s * fs)))
-    ff = {h: fault_frequency(DRIVE_END_6205, h, rpm) for h in HYPOTHESES}
+    t_cpu = time.process_time()
+    decisions: list[Decision] = []
+    try:
+        for i in range(0, x.size, chunk):
+            y = x[i:i + chunk]
+            for h in feeds:
+                if h in obs:
+                    out = obs[h].process(y)
+                    decisions += dg.update(h, i, fs, out.residual, out.estimate, out.impulse_train,
+                                           obs[h].fault_frequency)
+                    for k, parts in keep.get(h, {}).items():
+                        parts.append(np.asarray(getattr(out, k), float))
+                else:
+                    decisions += dg.update(h, i, fs, y, None, None, fault_hz[h])
+        decisions += dg.flush()
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    cpu = time.process_time() - t_cpu
+    streams = {h.label: {k: np.concatenate(v) for k, v in d.items()} | {"fault_frequency": obs[h].fault_frequency}
+               for h, d in keep.items()}
+    problems = [(d.window_start, d.window_end, d.detail[len("sensor: "):]) for d in decisions if is_sensor_problem(d)]
+    segs = segments_from_decisions(decisions, x.size / fs, ms)
+    if decisions and not segs:
+        raise InputError(f"no window could be diagnosed: {problems[0][2]}")
+    return OfflineResult(segs, decisions, ms, fs, speed, x, truth, streams, cpu, method, problems)
+
+
+def _check(cfg: DiagnoserConfig, fs: float, bearing: Bearing, rpm: float | None, duration: float) -> None:
+    """One InputError line for a recording that cannot be diagnosed (before any work)."""
+    try:
+        if cfg.method == "spectral":
+            check_resolvable(fs, bearing, rpm or 60.0 * cfg.spectral.blind_range_hz[1], cfg.spectral, duration)
+            return
+        fold = cfg.fold
+        if fold.band[0] >= 0.45 * fs:
+            raise ValueError(f"sample rate {fs:g} Hz too low for the {fold.band[0]:g}-{fold.band[1]:g} Hz band")
+        if duration < fold.window_s:
+            raise ValueError(f"recording too short: {duration:.3f} s < one {fold.window_s} s window")
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+
+
+def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",
+                         config: DiagnoserConfig | None = None, bearing: Bearing | str | None = None,
+                         chunk_s: float = CHUNK_S) -> tuple[list[Segment], list[Decision]]:
+    """The decision with the defaults of ``model_set`` on a measurement alone (no observer: y fed
+    as both streams' residual, ŷ = 0): the "observer without train, L = 0" front end of
+    diagnosis-notes.md, for testing the decision core and for data without a model set."""
+    bearing = load_bearing(bearing)
+    cfg = config or config_for(model_set)
+    dg = Diagnoser(cfg, model_set, bearing, fs)
+    dg.tell_speed(rpm)
+    fault_hz = {h: fault_frequency(bearing, h, rpm or cfg.fold.nominal_rpm) for h in STREAMS}
+    chunk = max(1, int(round(chunk_s * fs)))
     out: list[Decision] = []
     for i in range(0, y.size, chunk):
-        for h in HYPOTHESES:
-            out += dg.update(h, i, fs, y[i:i + chunk], None, None, ff[h])
+        for h in STREAMS:
+            out += dg.update(h, i, fs, y[i:i + chunk], None, None, fault_hz[h])
     out += dg.flush()
     return segments_from_decisions(out, y.size / fs, model_set), out

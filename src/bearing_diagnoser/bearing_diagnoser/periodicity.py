@@ -26,6 +26,10 @@ from scipy import signal, sparse
 #: Target envelope sample rate (Hz): enough for folding at BPFI (≈ 162 Hz) with 16 bins.
 ENVELOPE_RATE = 4000.0
 
+#: Lags 0..this (s) of the thesis-literal correlation of |r| with the train: the observer's
+#: impulse response follows its impulse within a couple of milliseconds.
+XCORR_LAG_S = 2e-3
+
 
 def envelope_decimation(sample_rate: float, envelope_rate: float = ENVELOPE_RATE) -> int:
     """Integer block length D so that sample_rate / D is close to ``envelope_rate``."""
@@ -39,31 +43,36 @@ class EnergyEnvelope:
     ----------
     sample_rate : float
         Input rate (Hz).
-    band : (lo, hi)
+    band : (lo, hi) or None
         Pass band (Hz) of the order-4 Butterworth band-pass; ``hi`` is clipped below
-        0.45 · sample_rate.
+        0.45 · sample_rate. None: no envelope, only the block sums.
     decimation : int, optional
         Block length D (samples) of the envelope; default from :func:`envelope_decimation`.
 
-    Each call to :meth:`push` returns a dict of arrays, one entry per completed block:
-    ``env`` = mean of the squared band-passed signal ((m/s²)²), ``b4`` = mean of its
-    fourth power, and the raw sums ``y``, ``y2``, ``r2``, ``ar``, ``u`` (of y, y², r², |r|,
-    u) used for RMS, the model-explains fraction and the thesis-literal correlation.  Samples that do not fill a block are carried over.
+    Each call to :meth:`push` returns a dict of arrays, one entry per completed block
+    (:attr:`keys`): ``env`` = mean of the squared band-passed signal ((m/s²)²), ``b4`` = mean
+    of its fourth power, and the raw sums ``y``, ``y2``, ``r2``, ``ar``, ``u`` (of y, y², r²,
+    |r|, u) used for RMS, the model-explains fraction and the thesis-literal correlation.
+    Samples that do not fill a block are carried over.
     """
 
-    KEYS = ("env", "b4", "y", "y2", "r2", "ar", "u")
+    SUMS = ("y", "y2", "r2", "ar", "u")
 
-    def __init__(self, sample_rate: float, band: tuple[float, float], decimation: int | None = None):
+    def __init__(self, sample_rate: float, band: tuple[float, float] | None, decimation: int | None = None):
         if sample_rate <= 0:
             raise ValueError(f"sample_rate must be > 0, got {sample_rate}")
         self.sample_rate = float(sample_rate)
         self.decimation = int(decimation or envelope_decimation(sample_rate))
-        lo, hi = float(band[0]), min(float(band[1]), 0.45 * sample_rate)
-        if not 0 < lo < hi:
-            raise ValueError(f"invalid band {band} at {sample_rate} Hz")
-        self.band = (lo, hi)
-        self._sos = signal.butter(4, [lo, hi], btype="bandpass", fs=sample_rate, output="sos")
-        self._zi = np.zeros((self._sos.shape[0], 2))
+        self.band = None
+        self._sos = None
+        if band is not None:
+            lo, hi = float(band[0]), min(float(band[1]), 0.45 * sample_rate)
+            if not 0 < lo < hi:
+                raise ValueError(f"invalid band {band} at {sample_rate} Hz")
+            self.band = (lo, hi)
+            self._sos = signal.butter(4, [lo, hi], btype="bandpass", fs=sample_rate, output="sos")
+            self._zi = np.zeros((self._sos.shape[0], 2))
+        self.keys = (("env", "b4") if self._sos is not None else ()) + self.SUMS
         self._carry: dict[str, np.ndarray] = {k: np.zeros(0) for k in ("b", "y", "r", "u")}
 
     @property
@@ -71,30 +80,38 @@ class EnergyEnvelope:
         """Envelope (block) rate in Hz."""
         return self.sample_rate / self.decimation
 
+    def fresh(self) -> EnergyEnvelope:
+        """A new envelope of the same rate, band and block length (filter and blocks restarted)."""
+        return EnergyEnvelope(self.sample_rate, self.band, self.decimation)
+
     def push(self, y: np.ndarray, residual: np.ndarray | None = None,
              train: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """Feed measurement ``y`` (and optionally residual and train, same length)."""
         y = np.asarray(y, dtype=float)
         r = y if residual is None else np.asarray(residual, dtype=float)
         u = np.zeros_like(y) if train is None else np.asarray(train, dtype=float)
-        b, self._zi = signal.sosfilt(self._sos, y, zi=self._zi)
+        if self._sos is not None:
+            b, self._zi = signal.sosfilt(self._sos, y, zi=self._zi)
+        else:
+            b = np.zeros(0)
         c = self._carry
-        b = np.concatenate([c["b"], b])
         y = np.concatenate([c["y"], y])
         r = np.concatenate([c["r"], r])
         u = np.concatenate([c["u"], u])
         d = self.decimation
-        n = (b.size // d) * d
-        for k, arr in (("b", b), ("y", y), ("r", r), ("u", u)):
+        n = (y.size // d) * d
+        for k, arr in (("y", y), ("r", r), ("u", u)):
             c[k] = arr[n:].copy()
-        b, y, r, u = (a[:n].reshape(-1, d) for a in (b, y, r, u))
-        b2 = b * b
-        ar = np.abs(r)
-        return {
-            "env": b2.mean(axis=1), "b4": (b2 * b2).mean(axis=1),
-            "y": y.sum(axis=1), "y2": (y * y).sum(axis=1), "r2": (r * r).sum(axis=1),
-            "ar": ar.sum(axis=1), "u": u.sum(axis=1),
-        }
+        y, r, u = (a[:n].reshape(-1, d) for a in (y, r, u))
+        out = {"y": y.sum(axis=1), "y2": (y * y).sum(axis=1), "r2": (r * r).sum(axis=1),
+               "ar": np.abs(r).sum(axis=1), "u": u.sum(axis=1)}
+        if self._sos is not None:
+            b = np.concatenate([c["b"], b])
+            c["b"] = b[n:].copy()
+            b2 = b[:n].reshape(-1, d) ** 2
+            out["env"] = b2.mean(axis=1)
+            out["b4"] = (b2 * b2).mean(axis=1)
+        return out
 
 
 def period_grid(fault_hz: float, window_s: float, bins: int, search: float = 0.03) -> np.ndarray:

@@ -6,8 +6,9 @@
   3.14-3.15).
 * ``xcorr_<h>.png`` — the cross-correlation of |residual| with the train and the train
   autocorrelation as reference (section 3.2, Figs. 3.7-3.12, 3.16-3.17).
-* ``timeline.png`` — per-window CFAR scores (÷ threshold), model-explains fractions and
-  the published state over time.
+* ``timeline.png`` — per-window significance of each hypothesis (÷ threshold), the chosen
+  demodulation band and the shaft speed (envelope-spectrum decision) or the model-explains
+  fractions (folding decision), window labels and the published state over time.
 """
 
 from __future__ import annotations
@@ -99,13 +100,26 @@ def write_figures(result, directory) -> list[Path]:
     if dec:
         fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(10, 7))
         te = np.asarray([d.window_end for d in dec])
-        for h in ("outer_race", "inner_race"):
-            a1.plot(te, [d.scores.get(h, np.nan) for d in dec], label=f"{h} CFAR score ÷ threshold")
-            a2.plot(te, [d.scores.get(f"{h}_explained", np.nan) for d in dec], label=f"{h} model explains")
+        for h in ("outer_race", "inner_race", "ball"):
+            if any(h in d.scores for d in dec):
+                a1.plot(te, [d.scores.get(h, np.nan) for d in dec], label=f"{h} significance ÷ threshold")
         a1.axhline(1.0, color="k", ls="--", lw=0.8)
         a1.legend(fontsize=8)
-        a2.set_ylim(-1.05, 1.05)
-        a2.legend(fontsize=8)
+        if any("band_low_hz" in d.scores for d in dec):
+            lo = np.asarray([d.scores.get("band_low_hz", np.nan) for d in dec])
+            hi = np.asarray([d.scores.get("band_high_hz", np.nan) for d in dec])
+            a2.fill_between(te, lo / 1e3, hi / 1e3, step="pre", alpha=0.4, label="chosen demodulation band (kHz)")
+            a2.set_ylabel("kHz")
+            speed = a2.twinx()
+            speed.plot(te, [d.scores.get("speed_hz", np.nan) * 60.0 for d in dec], color="C1", lw=0.8,
+                       label="shaft speed used (rpm)")
+            speed.set_ylabel("rpm")
+            speed.legend(loc="lower right", fontsize=8)
+        else:
+            for h in ("outer_race", "inner_race"):
+                a2.plot(te, [d.scores.get(f"{h}_explained", np.nan) for d in dec], label=f"{h} model explains")
+            a2.set_ylim(-1.05, 1.05)
+        a2.legend(loc="upper left", fontsize=8)
         tl, lab = _state_track(dec, "label")
         ts, sta = _state_track(dec, "state")
         a3.plot(tl, lab, ".", ms=3, label="window label")

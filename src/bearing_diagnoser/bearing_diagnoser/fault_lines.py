@@ -1,0 +1,141 @@
+"""Fault evidence in the normalised envelope spectrum: harmonic and sideband combs, slip search.
+
+Each hypothesis is a comb of terms, in orders of the shaft rate fr (thesis eqs. 2.51-2.54 via
+:meth:`bearing_common.bearings.Bearing.orders`); a term's frequency is (c·ρ + d)·fr:
+
+* OUTER_RACE: carriers k·BPFO, k = 1..H;
+* INNER_RACE: carriers k·BPFI and the shaft-rate sidebands k·BPFI ± fr (the defect turns
+  with the shaft through the load zone, eq. 2.58; the sideband offset does not slip);
+* BALL: carriers 2k·BSF (a ball defect strikes both races once per spin revolution) and
+  the cage-rate sidebands 2k·BSF ± FTF (the ball travels with the cage through the load
+  zone; they slip with ρ).
+
+H = 3 harmonics. ρ, one scale per hypothesis for all its terms (impacts are periodic, so
+their harmonics are exact multiples of one rate), is searched on [1 − 2.5 % − 2u,
+1 + 1 % + 2u], u = the relative standard uncertainty of the shaft speed: rolling elements
+slip 1-2 % (Randall & Antoni 2011; measured 1-2 % on CWRU, about 1 % on MFPT) with 0.5 %
+margin, and +1 % covers geometry tolerance and cage slip, which raises BPFI = n(fr − FTF).
+
+Ambiguity: terms of two hypotheses closer (relatively) than the ρ-search width could be
+matched by either. Carrier-carrier and sideband-sideband collisions drop the term from
+both (6205: 3·BPFO and 2·BPFI lie 0.7 % apart); in a carrier-sideband collision only the
+sideband is dropped (a sideband exists only with its carrier).
+
+Shaft-line mask: at each ρ, a term within 1.5 bins of a shaft harmonic m·fr is not used
+(the Hann main lobe is ±1 bin at −6 dB): healthy machines put shaft harmonics into the
+envelope spectrum, and they must never count as fault evidence.
+
+Statistic at ρ: S(ρ) = sum of the active terms' normalised bins, J(ρ) active terms,
+log10 p(ρ) from :func:`.significance.comb_log10p`. The hypothesis p-value pays for the
+searches it made (Bonferroni): p_h = min(1, n_bands · n_cells · min_ρ p(ρ)), n_cells =
+distinct bins the highest term visits over the ρ range, n_bands = candidate bands when the
+band was chosen by this same evidence.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bearing_common.bearings import Bearing
+from bearing_common.states import FaultState
+
+from .significance import comb_log10p
+
+#: The fault hypotheses the envelope spectrum tests.
+HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL)
+
+#: Harmonics per hypothesis.
+N_HARMONICS = 3
+
+#: Slip range below / above the kinematic frequency (fractions).
+SLIP_BELOW, SLIP_ABOVE = 0.025, 0.01
+
+
+@dataclass(frozen=True)
+class CombEvidence:
+    """The best match of one hypothesis' comb in one window."""
+
+    log10p: float  # corrected for the ρ search and the band choice
+    rho: float  # scale of the kinematic frequencies where the comb matched best
+    statistic: float  # S, sum of the normalised bins
+    terms: int  # J, terms used
+
+
+def comb_terms(bearing: Bearing, harmonics: int = N_HARMONICS, fundamental_only: bool = False) -> dict:
+    """{hypothesis: (J, 3) array of (c, d, is_carrier)}: term frequency = (c·ρ + d)·fr."""
+    o = bearing.orders()
+    ks = [1] if fundamental_only else list(range(1, harmonics + 1))
+    outer = [(k * o.bpfo, 0.0, 1) for k in ks]
+    inner = [(k * o.bpfi, 0.0, 1) for k in ks]
+    ball = [(2 * k * o.bsf, 0.0, 1) for k in ks]
+    if not fundamental_only:
+        inner += [(k * o.bpfi, s, 0) for k in ks for s in (-1.0, 1.0)]
+        ball += [(2 * k * o.bsf + s * o.ftf, 0.0, 0) for k in ks for s in (-1.0, 1.0)]
+    return {FaultState.OUTER_RACE: np.asarray(outer, float), FaultState.INNER_RACE: np.asarray(inner, float),
+            FaultState.BALL: np.asarray(ball, float)}
+
+
+def drop_ambiguous(terms: dict, tolerance: float) -> dict:
+    """Terms without a term of another hypothesis closer than ``tolerance`` (relative)."""
+    out = {}
+    for h, own in terms.items():
+        f = own[:, 0] + own[:, 1]
+        keep = np.ones(len(own), bool)
+        for g, other in terms.items():
+            if g == h or len(other) == 0:
+                continue
+            fo = other[:, 0] + other[:, 1]
+            close = np.abs(f[:, None] / fo[None, :] - 1.0) < tolerance
+            carrier_over_sideband = (own[:, 2][:, None] == 1) & (other[:, 2][None, :] == 0)
+            keep &= ~(close & ~carrier_over_sideband).any(axis=1)
+        out[h] = own[keep]
+    return out
+
+
+def rho_range(u: float, slip_search: bool = True) -> tuple[float, float]:
+    """(ρ_lo, ρ_hi) for speed uncertainty ``u`` (relative); ±2u only without the slip search."""
+    if not slip_search:
+        return 1.0 - 2 * u, 1.0 + 2 * u
+    return 1.0 - SLIP_BELOW - 2 * u, 1.0 + SLIP_ABOVE + 2 * u
+
+
+def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[float, float],
+                  mask_shaft: bool = True, n_bands: int = 1) -> dict:
+    """Per hypothesis, per row of ``z`` (m, n_bins) of normalised SES: the best comb match.
+
+    Returns {hypothesis: (log10 p (m,), ρ (m,), S (m,), J (m,))} arrays; ``df`` = bin width
+    (Hz), ``fr`` = shaft rate (Hz).
+    """
+    z = np.atleast_2d(z)
+    m, nb = z.shape
+    out = {}
+    for h, t in terms.items():
+        if len(t) == 0:
+            out[h] = (np.zeros(m), np.ones(m), np.zeros(m), np.zeros(m, int))
+            continue
+        top = t[:, 0].max()
+        step = 0.5 * df / (top * fr)
+        rhos = np.arange(rho[0], rho[1] + step / 2, step) if rho[1] > rho[0] else np.array([1.0])
+        n_cells = int(np.ceil((rho[1] - rho[0]) * top * fr / df)) + 1
+        f = (t[None, :, 0] * rhos[:, None] + t[None, :, 1]) * fr  # (n_rho, J)
+        idx = np.rint(f / df).astype(int)
+        active = (idx >= 1) & (idx < nb)
+        if mask_shaft:
+            order = np.rint(f / fr)
+            active &= ~((order >= 1) & (np.abs(f - order * fr) < 1.5 * df))
+        values = np.where(active[None], z[:, np.clip(idx, 0, nb - 1)], 0.0)  # (m, n_rho, J)
+        s = values.sum(axis=2)
+        j = active.sum(axis=1)
+        lp = comb_log10p(s, j[None, :])
+        best = np.argmin(lp, axis=1)
+        rows = np.arange(m)
+        out[h] = (np.minimum(0.0, lp[rows, best] + np.log10(n_cells * n_bands)), rhos[best], s[rows, best], j[best])
+    return out
+
+
+def highest_term(terms: dict, rho_hi: float) -> float:
+    """Highest term frequency in orders (at ρ = ``rho_hi``): the top of the envelope band tested."""
+    rows = np.concatenate([t for t in terms.values() if len(t)])
+    return float((rows[:, 0] * rho_hi + rows[:, 1]).max())

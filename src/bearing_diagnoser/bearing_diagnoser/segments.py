@@ -1,0 +1,82 @@
+"""Segments: maximal runs of one published state, the unit ``bearing-diagnose`` prints (CONTRACT.md)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bearing_common.states import FaultState
+
+from .state_tracker import Decision
+
+#: Scores summarised per segment (median over the segment's windows), where the front end has them.
+SEGMENT_SCORE_KEYS = (
+    "outer_race", "inner_race", "ball",  # significance (>= 1: significant)
+    "outer_race_posterior", "inner_race_posterior", "ball_posterior", "normal_posterior",
+    "band_low_hz", "band_high_hz", "speed_hz", "speed_sigma_hz",  # spectral: chosen band, speed
+    "outer_race_explained", "inner_race_explained", "outer_race_xcorr", "inner_race_xcorr",  # thesis blocks
+    "kurtosis",  # fold
+)
+
+
+@dataclass
+class Segment:
+    """A maximal run of one state (times in s from the data start)."""
+
+    start: float
+    end: float
+    state: FaultState
+    confidence: float
+    detected_at: float
+    scores: dict = field(default_factory=dict)
+    model_set: str = ""
+
+    def to_json(self) -> dict:
+        """The contract's JSON object."""
+        return {"start": round(self.start, 6), "end": round(self.end, 6), "state": self.state.label,
+                "confidence": round(float(np.clip(self.confidence, 0, 1)), 4),
+                "detected_at": round(self.detected_at, 6),
+                "scores": {k: round(float(v), 4) for k, v in self.scores.items() if np.isfinite(v)},
+                "model_set": self.model_set}
+
+
+def is_sensor_problem(decision: Decision) -> bool:
+    """Whether a window was not diagnosed because the sensor signal is unusable."""
+    return decision.detail.startswith("sensor:")
+
+
+def segments_from_decisions(decisions: list[Decision], duration: float, model_set: str) -> list[Segment]:
+    """Maximal runs of the published state; start = estimated onset, end = next onset.
+
+    Windows with a sensor problem are not diagnosed and take no part.
+    """
+    segs: list[Segment] = []
+    members: list[list[Decision]] = []
+    for d in (d for d in decisions if not is_sensor_problem(d)):
+        if not segs:
+            segs.append(Segment(0.0, duration, d.state, 0.0, d.time, {}, model_set))
+            members.append([])
+        elif d.changed:
+            onset = max(0.0, d.onset)
+            while len(segs) > 1 and onset <= segs[-1].start + 1e-12:  # the new state began before the last one
+                segs.pop()
+                members.pop()
+            if segs[-1].state == d.state:  # back to the state the popped segments interrupted
+                segs[-1].end = duration
+            elif len(segs) == 1 and onset <= 1e-12:
+                segs[0] = Segment(0.0, duration, d.state, 0.0, d.time, {}, model_set)
+                members[0] = []
+            else:
+                segs[-1].end = onset
+                segs.append(Segment(onset, duration, d.state, 0.0, d.time, {}, model_set))
+                members.append([])
+        members[-1].append(d)
+    for s, ms in zip(segs, members):
+        conf = [d.confidence for d in ms]
+        s.confidence = float(np.mean(conf)) if conf else 0.0
+        for k in SEGMENT_SCORE_KEYS:
+            v = [d.scores[k] for d in ms if k in d.scores and np.isfinite(d.scores[k])]
+            if v:
+                s.scores[k] = float(np.median(v))
+    return segs

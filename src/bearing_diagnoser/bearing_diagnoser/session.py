@@ -1,0 +1,204 @@
+"""The diagnoser node's session, without rclpy: residual chunks in, fault states and health out.
+
+What the node does between ROS and the decision core:
+
+* every residual chunk passes :class:`bearing_observer.chunk_stream.ChunkStream` (empty, huge,
+  non-finite, wrong-rate, out-of-order chunks are rejected and counted);
+* restart rule: the decision core (:class:`.decision.Diagnoser`) restarts when a stream that
+  already fed it restarts (a restarted observer or sensor: index back to 0, a new rate) —
+  its stream is then a new one — or when a parameter that shapes the decision changes;
+* time: a decision's stamp is the time of its window's end, from the chunk stamps
+  (stamp of sample index 0 + index / rate), never from arrival;
+* health: the /diagnostics level and key-values — STALE when no residual arrived within
+  the stale timeout, WARN when one observer is silent, when the sensor signal is unusable
+  (:mod:`.sensor_health`) or the state is UNKNOWN, ERROR for a fault, OK for NORMAL.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from bearing_common import topics
+from bearing_common.bearings import load_bearing
+from bearing_common.states import FaultState
+from bearing_observer.chunk_stream import ChunkStream
+
+from .decision import STREAMS, Diagnoser
+from .decision_config import config_for
+from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL
+from .state_tracker import Decision
+
+
+@dataclass(frozen=True)
+class StateReport:
+    """A fault state to publish: times in seconds of the streams' stamps."""
+
+    state: FaultState
+    confidence: float
+    stamp: float
+    onset: float
+    scores: dict
+    model_set: str
+    detail: str
+    changed: bool
+
+
+@dataclass
+class Health:
+    """The /diagnostics status: level (0-3), one-line message, key-values."""
+
+    level: int
+    message: str
+    values: dict = field(default_factory=dict)
+
+
+class DiagnoserSession:
+    """Session state of one diagnoser (see the module docstring).
+
+    Parameters
+    ----------
+    values : dict
+        The node's parameter values (:data:`.diagnoser_node_config.PARAMETERS`), kept current
+        by the node.
+    log : callable(level, text)
+        Where to say what happened (``"info"``, ``"warn"``).
+    """
+
+    def __init__(self, values: dict, log):
+        self.values = values
+        self._log = log
+        self.streams = {h: ChunkStream(topics.residual_topic(h).name) for h in STREAMS}
+        self.core: Diagnoser | None = None
+        self._fed: set = set()  # streams that fed the current core
+        self.time_offset = 0.0  # stamp of sample index 0 (s)
+        self.last_heard = {h: None for h in STREAMS}
+        self.shaft_rpm: float | None = None
+        self.last_report: StateReport | None = None
+        self.sensor_problem = ""
+        self.rejected_speeds = 0
+
+    # -- configuration -----------------------------------------------------------------
+    def configure(self, changed: dict) -> None:
+        """Parameters changed (already applied to ``values``): restart the decision if they shape it."""
+        if self.core is not None and any(k in RESTART_ON for k in changed):
+            self._log("info", f"{', '.join(sorted(changed))} changed; the decision restarts with the next chunk")
+            self.core = None
+
+    def _make_core(self, model_set: str, sample_rate: float) -> Diagnoser:
+        v = self.values
+        name = v["model_set"] or model_set
+        cfg = config_for(name)
+        if v["false_alarm_probability"] > 0:
+            cfg = replace(cfg, pfa=float(v["false_alarm_probability"]))
+        cfg = replace(cfg, spectral=replace(cfg.spectral, usable_bandwidth=float(v["sensor_bandwidth"]),
+                                            window_s=float(v["window"])),
+                      fold=replace(cfg.fold, window_s=float(v["window"]) or cfg.fold.window_s))
+        core = Diagnoser(cfg, name, load_bearing(v["bearing"]), sample_rate)
+        core.keep_history = False
+        self._tell_speed(core)
+        what = ("window 4 cage periods of the bearing" if cfg.method == "spectral" and not v["window"]
+                else f"window {v['window'] or cfg.fold.window_s:g} s")
+        self._log("info", f"deciding with the {cfg.method} front end ({name or 'no'} model set), bearing "
+                          f"{core.bearing.name}, {what}, false-alarm probability {cfg.pfa:g} per window")
+        return core
+
+    def _tell_speed(self, core: Diagnoser) -> None:
+        if self.shaft_rpm is not None:
+            core.tell_speed(self.shaft_rpm)  # a measured speed: the default 2 % tolerance
+        elif self.values["rpm"] > 0:
+            core.tell_speed(float(self.values["rpm"]), float(self.values["rpm_tolerance"]))
+        else:
+            core.tell_speed(None)
+
+    # -- inputs ------------------------------------------------------------------------
+    def on_speed(self, rad_s: float) -> None:
+        """A ``shaft_speed`` message (rad/s)."""
+        if not (math.isfinite(rad_s) and rad_s > 0):
+            self.rejected_speeds += 1
+            self._log("warn", f"ignoring shaft speed {rad_s!r} rad/s")
+            return
+        rpm = rad_s * 60.0 / (2.0 * math.pi)
+        if self.shaft_rpm is None or abs(rpm / self.shaft_rpm - 1.0) > 1e-3:
+            self.shaft_rpm = rpm
+            if self.core is not None:
+                self._tell_speed(self.core)
+
+    def on_residual(self, hypothesis: FaultState, stamp: float, first_index: int, sample_rate: float,
+                    residual, estimate, train, fault_hz: float, model_set: str, now: float) -> list[StateReport]:
+        """One residual chunk (arrays of equal length); returns the fault states to publish."""
+        self.last_heard[hypothesis] = now
+        r = np.asarray(residual, dtype=float)
+        stream = self.streams[hypothesis]
+        verdict = stream.check(stamp, first_index, sample_rate, r)
+        if verdict.accepted and not (len(estimate) == len(train) == r.size):
+            stream.counts["rejected"] += 1
+            self._log("warn", f"rejected residual chunk: {stream.name}: array lengths differ")
+            return []
+        if not verdict.accepted:
+            self._log("warn", f"rejected residual chunk: {verdict.reason}")
+            return []
+        if self.core is None or (verdict.restart and hypothesis in self._fed):
+            if self.core is not None:
+                self._log("info", f"{verdict.reason}; restarting the decision")
+            self.core = self._make_core(model_set, sample_rate)
+            self._fed = set()
+            self.time_offset = stamp - first_index / sample_rate
+        self._fed.add(hypothesis)
+        try:
+            decisions = self.core.update(hypothesis, first_index, sample_rate, r, np.asarray(estimate, float),
+                                         np.asarray(train, float), fault_hz)
+        except ValueError as exc:
+            stream.counts["rejected by decision"] += 1
+            self._log("warn", f"rejected residual chunk: {exc}")
+            return []
+        return [self._report(d) for d in decisions if self._account(d)]
+
+    def _account(self, d: Decision) -> bool:
+        """Remember a window's sensor verdict; True when its state is to be published."""
+        self.sensor_problem = d.detail[len("sensor: "):] if d.detail.startswith("sensor:") else ""
+        return not self.sensor_problem
+
+    def _report(self, d: Decision) -> StateReport:
+        report = StateReport(d.state, d.confidence, self.time_offset + d.time, self.time_offset + d.onset,
+                             d.scores, self.core.model_set, d.detail, d.changed)
+        self.last_report = report
+        return report
+
+    # -- health ------------------------------------------------------------------------
+    def health(self, now: float) -> Health:
+        """The /diagnostics status at node time ``now`` (s)."""
+        timeout = float(self.values["stale_timeout"])
+        silent = [topics.residual_topic(h).name for h, t in self.last_heard.items() if t is None or now - t > timeout]
+        report = self.last_report
+        state = report.state if report else FaultState.NORMAL
+        values = {"state": state.name}
+        if report is not None:
+            values.update({"confidence": f"{report.confidence:.3f}", "onset (s)": f"{report.onset:.4f}",
+                           "decided at (s)": f"{report.stamp:.4f}", "model set": report.model_set})
+            values.update({k: f"{v:.4g}" for k, v in report.scores.items()})
+        if self.core is not None:
+            values["bearing"] = self.core.bearing.name
+        if self.shaft_rpm is not None:
+            values["shaft speed (rpm)"] = f"{self.shaft_rpm:.1f}"
+        for stream in self.streams.values():
+            values[f"{stream.name} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
+        if self.rejected_speeds:
+            values["rejected shaft speeds"] = str(self.rejected_speeds)
+        if len(silent) == len(self.last_heard):
+            return Health(LEVEL_STALE, "no residuals: " + ", ".join(silent), values)
+        level, message = STATE_LEVEL[state], state.name
+        if self.sensor_problem:
+            level, message = max(level, LEVEL_WARN), f"sensor problem: {self.sensor_problem}"
+            values["sensor"] = self.sensor_problem
+        if silent:
+            level = max(level, LEVEL_WARN)
+            message += " (waiting for " + ", ".join(silent) + ")"
+        return Health(level, message, values)
+
+    def final_health(self, now: float) -> Health:
+        """The last status, sent when the node stops."""
+        last = self.health(now)
+        return Health(LEVEL_STALE, "diagnoser stopped", last.values)
