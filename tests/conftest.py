@@ -1,4 +1,4 @@
-"""Shared test fixtures: where the repository and ../shared are."""
+"""Shared test fixtures: where the repository and the recordings in ../shared/data are."""
 
 import os
 import pathlib
@@ -9,19 +9,34 @@ REPO_ROOT = pathlib.Path(__file__).resolve().parent.parent
 SHARED_DIR = REPO_ROOT.parent / "shared"
 
 
-def cwru_dir() -> pathlib.Path:
-    """Directory of the CWRU recordings: $BEARING_CWRU_DIR or ../shared/data/cwru."""
-    return pathlib.Path(os.environ.get("BEARING_CWRU_DIR", SHARED_DIR / "data" / "cwru"))
+def data_dir() -> pathlib.Path:
+    """Directory of the recordings (cwru/, mfpt/, hit-sm/): $BEARING_DATA_DIR or ../shared/data."""
+    return pathlib.Path(os.environ.get("BEARING_DATA_DIR", SHARED_DIR / "data"))
+
+
+def _finder(subdir: str):
+    def find(name: str) -> pathlib.Path:
+        path = data_dir() / subdir / name
+        if not path.is_file():
+            pytest.skip(f"recording {subdir}/{name} not found in {data_dir()} (provided beside the repository "
+                        "as ../shared/data in CI; set BEARING_DATA_DIR to use another copy)")
+        return path
+    return find
 
 
 @pytest.fixture
 def cwru_record():
     """Path of a CWRU record by file name; skips with the reason when it is absent."""
-    def find(name: str) -> pathlib.Path:
-        path = cwru_dir() / name
-        if not path.is_file():
-            pytest.skip(f"CWRU recording {name} not found in {cwru_dir()} "
-                        "(provided beside the repository as ../shared/data/cwru in CI; "
-                        "set BEARING_CWRU_DIR to use another copy)")
-        return path
-    return find
+    return _finder("cwru")
+
+
+@pytest.fixture
+def mfpt_record():
+    """Path of an MFPT record by file name; skips with the reason when it is absent."""
+    return _finder("mfpt")
+
+
+@pytest.fixture
+def hit_record():
+    """Path of a HIT-SM SpectraQuest record by file name; skips with the reason when it is absent."""
+    return _finder("hit-sm/spectraquest")

@@ -60,13 +60,14 @@ class LabelledRecording:
         return rec
 
 
-def load_manifest(path) -> list[LabelledRecording]:
-    """Entries of a manifest file (see the module docstring); InputError on a malformed one."""
+def load_manifest(path, root=None) -> list[LabelledRecording]:
+    """Entries of a manifest file (see the module docstring); ``root`` overrides its ``root``.
+    InputError on a malformed manifest."""
     import yaml
     path = Path(path)
     try:
         data = yaml.safe_load(path.read_text())
-        root = (path.parent / data.get("root", ".")).resolve()
+        root = Path(root) if root is not None else (path.parent / data.get("root", ".")).resolve()
         out = []
         for e in data["recordings"]:
             file = root / e["file"]

@@ -204,13 +204,13 @@ class Diagnoser:
         return out
 
     def _spectral_scores(self, w: WindowEvidence) -> dict[str, float]:
-        level = significance_level(self.config.pfa, len(w.evidence))
         scores: dict[str, float] = {}
         for h, e in w.evidence.items():
-            scores[h.label] = e.log10p / level  # >= 1: significant
+            scores[h.label] = e.log10p / significance_level(self.config.pfa, len(w.evidence))  # >= 1: significant
             scores[f"{h.label}_rho"] = e.rho
-        scores.update(band_low_hz=w.band.low, band_high_hz=w.band.high, band_candidates=w.band.candidates,
-                      speed_hz=w.speed_hz, speed_sigma_hz=w.speed_sigma, rms=w.sensor.rms)
+        if w.band is not None:
+            scores.update(band_low_hz=w.band.low, band_high_hz=w.band.high, band_candidates=w.band.candidates)
+        scores.update(speed_hz=w.speed_hz, speed_sigma_hz=w.speed_sigma, rms=w.sensor.rms)
         scores.update(self._model_scores(w.start, w.end))
         return scores
 

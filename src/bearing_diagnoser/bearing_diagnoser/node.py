@@ -35,6 +35,7 @@ class DiagnoserNode(Node):
         super().__init__("diagnoser")
         self.values = declare(self, PARAMETERS, on_change=lambda changed: self.session.configure(changed))
         self.session = DiagnoserSession(self.values, self._log)
+        self.session.warm_up()  # before subscribing: being subscribed means being ready
         self.pub_state = self.create_publisher(FaultStateMsg, topics.FAULT_STATE.name, topics.qos(topics.FAULT_STATE))
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
         for h, topic in topics.RESIDUALS.items():

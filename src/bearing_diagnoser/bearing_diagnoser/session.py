@@ -26,9 +26,11 @@ from bearing_common.bearings import load_bearing
 from bearing_common.states import FaultState
 from bearing_observer.chunk_stream import ChunkStream
 
+from . import significance
 from .decision import STREAMS, Diagnoser
-from .decision_config import config_for
+from .decision_config import MODEL_SET_DEFAULTS, config_for
 from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL
+from .offline import MODEL_SETS
 from .state_tracker import Decision
 
 
@@ -80,6 +82,14 @@ class DiagnoserSession:
         self.sensor_problem = ""
         self.rejected_speeds = 0
 
+    def warm_up(self) -> None:
+        """Compute now what the first windows would otherwise stall on: the p-value tables and
+        the folding thresholds of the simulator model sets (about 1 s each)."""
+        significance.warm_up()
+        for name, cfg in MODEL_SET_DEFAULTS.items():
+            if cfg.method == "fold" and (self.values["model_set"] in ("", name)):
+                Diagnoser(cfg, name, load_bearing(self.values["bearing"]), MODEL_SETS[name][1]).thresholds()
+
     # -- configuration -----------------------------------------------------------------
     def configure(self, changed: dict) -> None:
         """Parameters changed (already applied to ``values``): restart the decision if they shape it."""
@@ -122,6 +132,8 @@ class DiagnoserSession:
             return
         rpm = rad_s * 60.0 / (2.0 * math.pi)
         if self.shaft_rpm is None or abs(rpm / self.shaft_rpm - 1.0) > 1e-3:
+            if self.shaft_rpm is None:
+                self._log("info", f"shaft speed {rpm:.1f} rpm from {topics.SHAFT_SPEED.name}")
             self.shaft_rpm = rpm
             if self.core is not None:
                 self._tell_speed(self.core)

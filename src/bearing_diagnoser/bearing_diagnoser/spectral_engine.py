@@ -85,14 +85,15 @@ class WindowEvidence:
     """What one analysis window shows.
 
     ``start``/``end``: sample indices (end exclusive); ``evidence``: per hypothesis
-    (:data:`.fault_lines.HYPOTHESES`); ``speed_hz``/``speed_sigma``: shaft rate used and its
+    (:data:`.fault_lines.HYPOTHESES`), empty when the sensor signal is unusable (then ``band``
+    may be None); ``speed_hz``/``speed_sigma``: shaft rate used and its
     standard uncertainty (Hz), ``speed_source`` "told", "refined" or "estimated".
     """
 
     start: int
     end: int
     evidence: dict
-    band: BandChoice
+    band: BandChoice | None
     speed_hz: float
     speed_sigma: float
     speed_source: str
@@ -220,8 +221,9 @@ class SpectralEngine:
             if end - self._origin < self.window:  # the window grew with a slower speed
                 self._next_end = self._origin + self.window
                 continue
-            if self.band is not None:
-                out.append(self._window(end))
+            window = self._window(end)
+            if window is not None:
+                out.append(window)
             self._next_end = end + self.hop
         self._trim()
         return out
@@ -235,11 +237,16 @@ class SpectralEngine:
             self._buf = self._buf[drop:]
             self._buf_start += drop
 
-    def _window(self, end: int) -> WindowEvidence:
+    def _window(self, end: int) -> WindowEvidence | None:
+        """The window ending at ``end``: its evidence; no evidence for a sensor problem; None
+        when no demodulation band could be chosen (no usable band power)."""
         s = self.settings
         x = self._buf[end - self.window - self._buf_start: end - self._buf_start]
         sensor = check_window(x)
         fr, sigma, source = self.speed
+        if not sensor.ok or self.band is None:
+            return None if sensor.ok else WindowEvidence(end - self.window, end, {}, self.band, fr, sigma, source,
+                                                         sensor)
         spectrum = window_spectrum(x, s.prewhiten)
         ses, df = band_ses(spectrum, x.size, self.fs, np.array([[self.band.low, self.band.high]]), self.f_top)
         found = comb_evidence(normalise(ses), df, fr, self.terms, self.rho, s.mask_shaft, self.band.candidates)
