@@ -137,3 +137,47 @@ def test_plot_writes_figures(tmp_path, capsys):
     names = sorted(p.name for p in (tmp_path / "fig").iterdir())
     assert names == ["acceleration_states.png", "residual_inner_race.png", "residual_outer_race.png",
                      "timeline.png", "xcorr_inner_race.png", "xcorr_outer_race.png"]
+
+
+# ---------------------------------------------------------------------------------------
+# real recordings of the three rigs, read directly
+
+def test_mfpt_recording_needs_nothing_else(mfpt_record, capsys):
+    code, lines, err = run([mfpt_record("OuterRaceFault_vload_2.mat")], capsys)
+    assert code == 0, err
+    assert [x["state"] for x in lines] == ["outer_race"] and lines[0]["model_set"] == "none"
+    assert "NICE (MFPT rig)" in err
+    assert lines[0]["scores"]["speed_hz"] == pytest.approx(25.0, rel=0.02)  # refined from the vibration
+
+
+def test_hit_sm_recording_with_rate_and_speed(hit_record, capsys):
+    code, lines, err = run([hit_record("IR5_900.mat"), "--sample-rate", 51200, "--rpm", 900], capsys)
+    assert code == 0, err
+    assert [x["state"] for x in lines] == ["inner_race"]
+    assert "assuming g" in err  # the file does not state its unit
+    band = (lines[0]["scores"]["band_low_hz"], lines[0]["scores"]["band_high_hz"])
+    assert 0 < band[0] < band[1] <= 0.45 * 51200
+
+
+def test_cwru_fan_end_channel_monitors_the_fan_end_bearing(cwru_record, capsys):
+    code, _, err = run([cwru_record("105_IR007_0hp_DE12k.mat"), "--sample-rate", 12000,
+                        "--channel", "X105_FE_time"], capsys)
+    assert code == 0, err
+    assert "bearing SKF 6203" in err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--sample-rate", 100], "sample rate 100 Hz too low for bearing"),
+    (["--sample-rate", 12000, "--rpm", 60000], "too low for bearing"),  # lines beyond Nyquist
+    (["--sample-rate", 12000, "--rpm", 30], "too short"),  # 4 cage periods at 0.5 Hz: 20 s
+    (["--sample-rate", 12000, "--bearing", "nosuch"], "unknown bearing 'nosuch'"),
+    (["--sample-rate", 12000, "--bearing", "9,7mm,5mm"], "need 0 < element diameter < pitch diameter"),
+])
+def test_undecidable_cwru_inputs_fail_fast_with_one_line(cwru_record, capsys, argv, message):
+    import time
+    start = time.monotonic()
+    code, lines, err = run([cwru_record("105_IR007_0hp_DE12k.mat"), *argv], capsys)
+    assert code == 2 and lines == []
+    errors = [x for x in err.splitlines() if "error:" in x]
+    assert len(errors) == 1 and message in errors[0], err
+    assert time.monotonic() - start < 10.0

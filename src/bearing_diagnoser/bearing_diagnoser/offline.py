@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -127,6 +127,14 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     ms = choose_model_set(rec, bearing, model_set)
     LOG.info("model set %s%s; bearing %s", ms, "" if model_set else " (chosen from the input)", bearing.name)
     fs = MODEL_SETS[ms][1] or rec.sample_rate
+    cfg = config or config_for(ms)
+    if method == "envelope":
+        cfg = envelope_baseline(cfg)
+    if fs > rec.sample_rate:  # upsampled: nothing above the input's own band is measurement
+        usable = min(cfg.spectral.usable_bandwidth or np.inf, 0.45 * rec.sample_rate)
+        cfg = replace(cfg, spectral=replace(cfg.spectral, usable_bandwidth=usable))
+    speed = _speed(rec, rpm)
+    _check(cfg, min(fs, rec.sample_rate), bearing, speed, rec.duration)
     x = rec.accel
     if abs(rec.sample_rate - fs) > 1e-9 * fs:
         LOG.info("resampling %g Hz -> %g Hz (anti-aliased, resample_poly) for model set %s", rec.sample_rate, fs, ms)
@@ -134,11 +142,6 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     truth = rec.truth
     if truth is not None and truth.size != x.size:
         truth = truth[np.minimum((np.arange(x.size) * rec.sample_rate / fs).astype(int), truth.size - 1)]
-    cfg = config or config_for(ms)
-    if method == "envelope":
-        cfg = envelope_baseline(cfg)
-    speed = _speed(rec, rpm)
-    _check(cfg, fs, bearing, speed, x.size / fs)
     dg = Diagnoser(cfg, ms, bearing, fs)
     dg.tell_speed(speed)
     nominal = speed or cfg.fold.nominal_rpm
@@ -182,7 +185,7 @@ def _check(cfg: DiagnoserConfig, fs: float, bearing: Bearing, rpm: float | None,
             check_resolvable(fs, bearing, rpm or 60.0 * cfg.spectral.blind_range_hz[1], cfg.spectral, duration)
             return
         fold = cfg.fold
-        if fold.band[0] >= 0.45 * fs:
+        if fold.band[0] >= min(0.45 * fs, cfg.spectral.usable_bandwidth or np.inf):
             raise ValueError(f"sample rate {fs:g} Hz too low for the {fold.band[0]:g}-{fold.band[1]:g} Hz band")
         if duration < fold.window_s:
             raise ValueError(f"recording too short: {duration:.3f} s < one {fold.window_s} s window")

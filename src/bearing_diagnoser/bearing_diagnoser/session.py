@@ -80,6 +80,7 @@ class DiagnoserSession:
         self.shaft_rpm: float | None = None
         self.last_report: StateReport | None = None
         self.sensor_problem = ""
+        self.decision_problem = ""  # why the last chunk could not be decided on (cleared by a good one)
         self.rejected_speeds = 0
 
     def warm_up(self) -> None:
@@ -164,8 +165,10 @@ class DiagnoserSession:
                                          np.asarray(train, float), fault_hz)
         except ValueError as exc:
             stream.counts["rejected by decision"] += 1
-            self._log("warn", f"rejected residual chunk: {exc}")
+            self.decision_problem = str(exc)
+            self._log("warn", f"cannot decide: {exc}")
             return []
+        self.decision_problem = ""
         return [self._report(d) for d in decisions if self._account(d)]
 
     def _account(self, d: Decision) -> bool:
@@ -202,7 +205,9 @@ class DiagnoserSession:
         if len(silent) == len(self.last_heard):
             return Health(LEVEL_STALE, "no residuals: " + ", ".join(silent), values)
         level, message = STATE_LEVEL[state], state.name
-        if self.sensor_problem:
+        if self.decision_problem:
+            level, message = max(level, LEVEL_WARN), f"cannot decide: {self.decision_problem}"
+        elif self.sensor_problem:
             level, message = max(level, LEVEL_WARN), f"sensor problem: {self.sensor_problem}"
             values["sensor"] = self.sensor_problem
         if silent:

@@ -144,7 +144,10 @@ class SpectralEngine:
 
     # -- geometry that follows the speed -----------------------------------------------
     def _set_geometry(self, fr: float, sigma: float) -> None:
+        """Window, slip range and comb terms at shaft rate ``fr`` (Hz); ValueError when the sample
+        rate cannot resolve the bearing's fault lines at that speed (:func:`check_resolvable`)."""
         s = self.settings
+        check_resolvable(self.fs, self.bearing, 60.0 * fr, s)
         window_s = s.window_s or 4.0 / self.bearing.orders().ftf / fr
         self.window = next_fast_len(int(np.ceil(window_s * self.fs)))
         self.hop = self.window // 2

@@ -3,9 +3,12 @@
 Kinds, told apart by their variables:
 
 * **MFPT** — a struct ``bearing`` with ``gs`` (acceleration, g), ``sr`` (sample rate, Hz),
-  ``rate`` (shaft, Hz) and ``load``: nothing else is needed.
+  ``rate`` (shaft, Hz) and ``load``: nothing else is needed; the bearing is the rig's
+  (catalog ``mfpt``).
 * **CWRU** — variables ``X<rec>_DE_time``, ``X<rec>_FE_time``, ``X<rec>_BA_time`` (g) and
-  ``X<rec>RPM``; the sample rate is not stored (12 or 48 kHz) and must be given.
+  ``X<rec>RPM``; the sample rate is not stored (12 or 48 kHz) and must be given. The bearing
+  is the one the channel's accelerometer sits on: the drive end's SKF 6205 (``_DE_`` and the
+  base ``_BA_``), the fan end's SKF 6203 (``_FE_``).
 * **one signal** — exactly one numeric vector variable, whatever its name (HIT-SM:
   ``z15_1``, ``VarName3``, ...); sample rate must be given, units assumed g unless stated.
 
@@ -92,7 +95,7 @@ def _load_mfpt(path, struct, sample_rate, rpm, channel) -> Recording:
     fs = check_rate(sample_rate if sample_rate is not None else _scalar(rec["sr"], "bearing.sr", path))
     speed = check_rpm(rpm) if rpm is not None else check_rpm(60.0 * _scalar(rec["rate"], "bearing.rate", path))
     x = check_samples(rec[ch], f"{path}:bearing.{ch}") * STANDARD_GRAVITY
-    return Recording(x, fs, speed, "mfpt", None, ch, str(path))
+    return Recording(x, fs, speed, "mfpt", None, ch, str(path), bearing="mfpt")
 
 
 def _cwru_record(path, keys) -> str:
@@ -124,7 +127,7 @@ def _load_cwru(path, m, keys, sample_rate, rpm, channel) -> Recording:
         key = f"X{rec.group(1)}RPM" if rec else None
         speed = check_rpm(_scalar(m[key], key, path)) if key in m else None
     x = check_samples(m[channel], f"{path}:{channel}") * STANDARD_GRAVITY
-    return Recording(x, fs, speed, "cwru", None, channel, str(path))
+    return Recording(x, fs, speed, "cwru", None, channel, str(path), bearing="6203" if "_FE_" in channel else "6205")
 
 
 def _load_single(path, m, keys, sample_rate, rpm, channel, units) -> Recording:

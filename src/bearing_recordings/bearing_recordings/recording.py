@@ -45,7 +45,8 @@ class Recording:
     notes : list of str
         What the loader assumed (units, speed), for the user's log.
     bearing : str
-        Bearing stored with the recording (bags written by ``bearing-bag``), else "".
+        The bearing the recording monitors, when the file says (a catalog name or
+        description: MFPT files, the CWRU channel's end, bags written by ``bearing-bag``), else "".
     """
 
     accel: np.ndarray
