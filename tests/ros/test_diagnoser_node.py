@@ -74,11 +74,19 @@ def test_one_silent_observer_is_reported_and_decisions_continue(ros_graph):
     pub_or = ros_graph.publisher(topics.RESIDUAL_OUTER_RACE)
     ros_graph.start("bearing_diagnoser", "diagnoser", params={"diagnostics_period": 0.2})
     ros_graph.wait_until(lambda: pub_or.get_subscription_count(), 30.0, "the diagnoser to subscribe")
-    y = signal_normal_then_or(duration=1.6, change=0.0)
+    y = signal_normal_then_or(duration=3.0, change=1.5)  # decided 1 s behind (max_lag_s) without inner_race
+    half = len(y) // N // 2
     for i in range(len(y) // N):
         pub_or.publish(residual_msg(1, i, y[i * N:(i + 1) * N], BPFO))
         time.sleep(PACE_S)
+        if i == half:  # NORMAL decided with one observer silent: wait for a status of it
+            ros_graph.wait_until(lambda: any(s.message.startswith("NORMAL") for d in diags for s in d.status), 10.0,
+                                 "a status while NORMAL")
     ros_graph.wait_until(lambda: states and states[-1].state == FaultState.OUTER_RACE, 30.0,
                          "OUTER_RACE from the OR stream alone")
-    ros_graph.wait_until(lambda: any("waiting for residual/inner_race" in s.message
-                                     for d in diags for s in d.status), 10.0, "a WARN naming the silent observer")
+    ros_graph.wait_until(lambda: any(s.level == b"\x02" and "waiting for residual/inner_race" in s.message
+                                     for d in diags for s in d.status), 10.0, "an ERROR naming the silent observer")
+    statuses = [s for d in diags for s in d.status]
+    normal = [s for s in statuses if s.message.startswith("NORMAL")]
+    assert normal and all(s.level == b"\x01" for s in normal), [(s.level, s.message) for s in statuses]  # WARN
+    assert all("waiting for residual/inner_race" in s.message for s in normal)
