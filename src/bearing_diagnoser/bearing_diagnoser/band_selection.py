@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .envelope_spectrum import band_kurtosis, band_ses, normalise, window_spectrum
+from .envelope_spectrum import band_kurtosis, band_ses, normalise, unit_magnitude
 from .fault_lines import comb_evidence
 
 
@@ -65,12 +65,10 @@ def candidate_bands(fs: float, f_top: float, f_usable: float) -> list[np.ndarray
     return out
 
 
-def _band_power(x: np.ndarray, fs: float, bands: np.ndarray) -> np.ndarray:
-    power = np.abs(np.fft.rfft(x - x.mean())) ** 2
-    cumulative = np.concatenate([[0.0], np.cumsum(power)])
-    df = fs / x.size
-    i0 = np.clip(np.rint(bands[:, 0] / df).astype(int), 0, power.size)
-    i1 = np.clip(np.rint(bands[:, 1] / df).astype(int), 0, power.size)
+def _band_power(cumulative: np.ndarray, df: float, bands: np.ndarray) -> np.ndarray:
+    """Mean power of each band from the cumulative power spectrum (bin width ``df`` Hz)."""
+    i0 = np.clip(np.rint(bands[:, 0] / df).astype(int), 0, cumulative.size - 1)
+    i1 = np.clip(np.rint(bands[:, 1] / df).astype(int), 0, cumulative.size - 1)
     return (cumulative[i1] - cumulative[i0]) / np.maximum(i1 - i0, 1)
 
 
@@ -86,14 +84,16 @@ def choose_band(x: np.ndarray, fs: float, f_top: float, f_usable: float, fr: flo
     groups = candidate_bands(fs, f_top, f_usable)
     if not groups:
         return None
-    power = [_band_power(x, fs, g) for g in groups]
+    raw = np.fft.rfft(x - x.mean())
+    cumulative = np.concatenate([[0.0], np.cumsum(np.abs(raw) ** 2)])
+    power = [_band_power(cumulative, fs / x.size, g) for g in groups]
     floor = 1e-6 * float(np.median(np.concatenate(power)))
     groups = [g[p > floor] for g, p in zip(groups, power)]
     groups = [g for g in groups if len(g)]
     n_candidates = sum(len(g) for g in groups)
     if not n_candidates:
         return None
-    spectrum = window_spectrum(x, prewhiten)
+    spectrum = unit_magnitude(raw) if prewhiten else raw
     best, best_score = None, np.inf
     for bands in groups:
         if criterion == "kurtogram":

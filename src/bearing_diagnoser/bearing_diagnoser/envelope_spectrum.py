@@ -21,19 +21,32 @@ median's own scatter (accounted for exactly in :mod:`.significance`).
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 #: Half-width (bins) of the running median that normalises the SES.
 N_MED = 50
 
 
-def window_spectrum(x: np.ndarray, prewhiten: bool = True) -> np.ndarray:
-    """rfft of the mean-removed window; X/|X| (zeros stay zero) when ``prewhiten``."""
-    X = np.fft.rfft(x - x.mean())
-    if not prewhiten:
-        return X
+@lru_cache(maxsize=32)
+def hann(n: int) -> np.ndarray:
+    """Hann taper of ``n`` points without its zero end points (read-only, cached)."""
+    w = np.hanning(n + 2)[1:-1]
+    w.setflags(write=False)
+    return w
+
+
+def unit_magnitude(X: np.ndarray) -> np.ndarray:
+    """Cepstral prewhitening of a spectrum: X/|X|, phase kept, zeros stay zero."""
     mag = np.abs(X)
     return np.where(mag > 0, X / np.where(mag > 0, mag, 1.0), 0.0)
+
+
+def window_spectrum(x: np.ndarray, prewhiten: bool = True) -> np.ndarray:
+    """rfft of the mean-removed window, prewhitened (:func:`unit_magnitude`) when ``prewhiten``."""
+    X = np.fft.rfft(x - x.mean())
+    return unit_magnitude(X) if prewhiten else X
 
 
 def band_ses(X: np.ndarray, n: int, fs: float, bands: np.ndarray, f_max: float | None = None):
@@ -50,7 +63,7 @@ def band_ses(X: np.ndarray, n: int, fs: float, bands: np.ndarray, f_max: float |
     idx = np.clip(k1[:, None] + np.arange(width)[None, :], 0, X.size - 1)
     env = np.abs(np.fft.ifft(X[idx], axis=1)) ** 2
     env -= env.mean(axis=1, keepdims=True)
-    ses = np.abs(np.fft.rfft(env * np.hanning(width + 2)[1:-1], axis=1)) ** 2
+    ses = np.abs(np.fft.rfft(env * hann(width), axis=1)) ** 2
     if f_max is not None:
         ses = ses[:, : int(np.ceil(f_max / df_x)) + N_MED + 2]
     return ses, df_x

@@ -116,8 +116,9 @@ class SpectralEngine:
         self.bearing = bearing
         self.settings = settings
         self._told: tuple[float, float] | None = None  # (Hz, relative tolerance)
-        self._buf = np.zeros(0)
-        self._buf_start = 0  # absolute index of _buf[0]
+        self._store = np.zeros(0)  # samples live in _store[:_fill]; grown by doubling, not per chunk
+        self._fill = 0
+        self._buf_start = 0  # absolute index of the first held sample
         self._next_index: int | None = None  # absolute index of the next expected sample
         self._origin = 0  # absolute index where the current schedule began
         self._next_end: int | None = None
@@ -192,13 +193,23 @@ class SpectralEngine:
             y = y[self._next_index - first_index:]
             first_index = self._next_index
         if self._next_index is None or first_index > self._next_index:  # start or gap: a new schedule
-            self._buf, self._buf_start, self._origin = np.zeros(0), first_index, first_index
+            self._fill, self._buf_start, self._origin = 0, first_index, first_index
             self._next_end, self._last_update = None, None
         if y.size == 0:
             return []
-        self._buf = np.concatenate([self._buf, y])
+        if self._fill + y.size > self._store.size:
+            grown = np.zeros(max(2 * self._store.size, self._fill + y.size))
+            grown[:self._fill] = self._store[:self._fill]
+            self._store = grown
+        self._store[self._fill:self._fill + y.size] = y
+        self._fill += y.size
         self._next_index = first_index + y.size
         return self._run()
+
+    @property
+    def _buf(self) -> np.ndarray:
+        """The held samples (a view)."""
+        return self._store[:self._fill]
 
     def _run(self) -> list[WindowEvidence]:
         s = self.settings
@@ -235,9 +246,10 @@ class SpectralEngine:
         """Keep what the next re-estimation and window need."""
         window_s = self.window / self.fs if self._geometry_for else 0.0
         keep = int((max(self.settings.buffer_s, 2.0 * window_s) + window_s + 1.0) * self.fs)
-        if self._buf.size > keep:
-            drop = self._buf.size - keep
-            self._buf = self._buf[drop:]
+        if self._fill > 2 * keep:  # shift down only now and then: amortised O(1) per sample
+            drop = self._fill - keep
+            self._store[:keep] = self._store[drop:self._fill]
+            self._fill = keep
             self._buf_start += drop
 
     def _window(self, end: int) -> WindowEvidence | None:
