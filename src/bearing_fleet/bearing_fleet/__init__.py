@@ -1,0 +1,1 @@
+"""One view of a fleet of monitored motors: the ``fleet`` node (``fleet_state``) and ``bearing-fleet``."""
