@@ -10,10 +10,10 @@ how often it was right. Skips with the reason when the recordings are absent.
 from __future__ import annotations
 
 import pytest
+from conftest import REPO_ROOT, data_dir
 
 from bearing_common.states import FaultState
 from bearing_diagnoser.accuracy import calibration, load_manifest, markdown, run, totals
-from conftest import REPO_ROOT, data_dir
 
 MANIFEST = REPO_ROOT / "benchmarks" / "shared_data.yaml"
 
@@ -33,7 +33,7 @@ def results():
 
 def test_every_fault_but_the_undiagnosable_ball_record_and_no_alarm(results):
     got = totals([r for r in results if r.method == "model"])
-    for dataset, (right, faults, clean, healthy) in EXPECTED.items():
+    for dataset, (right, faults, _clean, healthy) in EXPECTED.items():
         t = got[dataset]
         assert (t["faults"], t["healthy"]) == (faults, healthy)
         assert t["faults_right"] >= right, (dataset, t, markdown(results))

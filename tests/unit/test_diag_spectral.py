@@ -1,9 +1,11 @@
 """The envelope-spectrum decision (real machines) on synthetic signals with known answers.
 
 Bursts of a 3 kHz resonance at the fault rates of an SKF 6205 at 1800 rpm (slipped 1 %, each
-impact time wandering 1 % of a period as real ones do), in white noise at the CWRU normal level; healthy machines with strong shaft and electrical lines;
-the noise null of the p-values; speed refinement and estimation; the analysis window rule;
-sensor problems; inputs that cannot be diagnosed.
+impact time wandering 1 % of a period as real ones do: strictly periodic impacts are discrete
+lines, which cepstral prewhitening removes like any other), in white noise at the CWRU normal
+level; healthy machines with strong shaft and electrical lines; the noise null of the
+p-values; speed refinement and estimation; the analysis window rule; sensor problems; inputs
+that cannot be diagnosed.
 """
 
 from __future__ import annotations

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from bearing_fleet.fleet_table import FleetTable, motor_of
+
 from bearing_common import topics
 from bearing_common.states import FaultState
-from bearing_fleet.fleet_table import FleetTable, motor_of
 
 
 def test_motor_is_the_namespace_of_the_fault_state_topic():
