@@ -49,7 +49,7 @@ def test_record_a_publisher_and_stop_by_signal(ros_graph, tmp_path, sig):
     t_start = time.time_ns()
     recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + ["record", "--out", str(bag)])
     for topic in (topics.qualified("", topics.VIBRATION), topics.qualified("", topics.FAULT_STATE)):
-        ros_graph.wait_until(lambda: any(f"first message on {topic}" in line for line in recorder.lines),
+        ros_graph.wait_until(lambda t=topic: any(f"first message on {t}" in line for line in recorder.lines),
                              timeout=30.0, what=f"the recorder to receive {topic}")
     n0 = len(seen)
     ros_graph.wait_until(lambda: len(seen) >= n0 + 20, timeout=30.0, what="20 more probe messages (1 s)")

@@ -73,6 +73,10 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _say(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
 def info_lines(bag_dir) -> list:
     """``bearing-bag info`` output lines (raises BagError)."""
     from .bag_read import bag_bearing, bag_namespace_hint, bag_storage, open_bag
@@ -129,10 +133,10 @@ def main(argv=None) -> int:
             if args.duration is not None and not args.duration > 0:
                 raise BagError(f"duration must be positive, got {args.duration:g} s")
             from .bag_record import record
-            record(args.out, args.topics, args.namespace, args.storage, args.duration)
+            record(args.out, args.topics, args.namespace, args.storage, args.duration, log=_say)
         elif args.command == "play":
             from .bag_play import play
-            play(args.bag, rate=args.rate, clock=args.clock, names=args.topics, loop=args.loop,
+            play(args.bag, rate=args.rate, clock=args.clock, names=args.topics, loop=args.loop, log=_say,
                  delay=args.delay, namespace=args.namespace,
                  wait_for_subscribers=args.wait_for_subscribers)
     except (BagError, InputError, BearingError) as exc:

@@ -13,7 +13,7 @@ at the end it waits until reliable subscribers have acknowledged everything.
 
 from __future__ import annotations
 
-import sys
+import logging
 import time
 from collections.abc import Callable
 
@@ -35,6 +35,8 @@ MATCH_SETTLE = 0.5
 
 #: Keep-last depth of the player's stream publishers (≥ the graph's 50, to absorb bursts).
 PLAY_DEPTH = 200
+
+LOG = logging.getLogger(__name__)
 
 
 def _relative(name: str, namespace: str) -> str:
@@ -71,7 +73,7 @@ def select_connections(reader, names=None, namespace=None) -> list:
 
 def play(bag_dir, rate: float = 1.0, clock: bool = False, names=None, loop: bool = False,
          delay: float = 1.0, namespace: str | None = None, wait_for_subscribers: int = 0,
-         log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)) -> dict:
+         log: Callable[[str], None] = LOG.info) -> dict:
     """Publish the recording; return the number of messages published per topic.
 
     ``namespace`` republishes the graph's topics under another namespace (``""`` = root)

@@ -10,8 +10,8 @@ recording and close the bag, which is then complete and readable.
 
 from __future__ import annotations
 
+import logging
 import signal
-import sys
 import time
 from collections.abc import Callable
 
@@ -27,6 +27,8 @@ DEFAULT_RECORD_TOPICS = tuple(n for n in topics.GRAPH_TOPICS if n != topics.DIAG
 #: Queue depth of the recorder's subscriptions (contract QoS policies, deeper queue).
 RECORD_DEPTH = 100
 
+LOG = logging.getLogger(__name__)
+
 
 def message_class(msgtype: str):
     """The rclpy message class of a rosbag2 type name such as ``bearing_msgs/msg/FaultState``."""
@@ -37,7 +39,7 @@ def message_class(msgtype: str):
 
 
 def record(out, names=None, namespace: str = "", storage: str = "mcap", duration: float | None = None,
-           log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True)) -> dict:
+           log: Callable[[str], None] = LOG.info) -> dict:
     """Record until SIGINT/SIGTERM or ``duration`` (s, wall time); return counts per topic.
 
     ``topics`` are graph topic names (relative to ``namespace``, or absolute); their
