@@ -34,6 +34,10 @@ from .offline import MODEL_SETS
 from .state_tracker import Decision
 
 
+#: Fastest plausible shaft (rev/min): anything above is a broken speed source.
+MAX_RPM = 1e6
+
+
 @dataclass(frozen=True)
 class StateReport:
     """A fault state to publish: times in seconds of the streams' stamps."""
@@ -126,12 +130,12 @@ class DiagnoserSession:
 
     # -- inputs ------------------------------------------------------------------------
     def on_speed(self, rad_s: float) -> None:
-        """A ``shaft_speed`` message (rad/s)."""
-        if not (math.isfinite(rad_s) and rad_s > 0):
+        """A ``shaft_speed`` message (rad/s); not finite, not positive or above 10⁶ rpm is refused."""
+        rpm = rad_s * 60.0 / (2.0 * math.pi)
+        if not (math.isfinite(rpm) and 0.0 < rpm <= MAX_RPM):
             self.rejected_speeds += 1
             self._log("warn", f"ignoring shaft speed {rad_s!r} rad/s")
             return
-        rpm = rad_s * 60.0 / (2.0 * math.pi)
         if self.shaft_rpm is None or abs(rpm / self.shaft_rpm - 1.0) > 1e-3:
             if self.shaft_rpm is None:
                 self._log("info", f"shaft speed {rpm:.1f} rpm from {topics.SHAFT_SPEED.name}")
