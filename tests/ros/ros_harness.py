@@ -133,5 +133,5 @@ class RosGraph:
         self._thread.join(timeout=2.0)
         self.executor.shutdown()
         self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
+        rclpy.try_shutdown(context=self.context)  # a signal may have shut it down (Jazzy: shutdown() raises then)
         return codes
