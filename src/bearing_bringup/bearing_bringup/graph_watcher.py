@@ -52,7 +52,11 @@ class GraphWatcher:
 
     def _spin(self):
         while self._running and self.context.ok():
-            self.executor.spin_once(timeout_sec=0.05)
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # Jazzy: RCLError when a signal shuts the context down mid-spin
+                if self.context.ok():
+                    raise
 
     def _on_state(self, msg):
         change = StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp), float(msg.confidence))
