@@ -1,8 +1,10 @@
-# The two README commands (and the benchmarks). Each first runs the idempotent setup.
+# The two README commands (and the benchmarks, lint, a fast unit loop). Each first runs the
+# idempotent setup, for ROS 2 $(ROS_DISTRO): Jazzy unless e.g. `ROS_DISTRO=kilted make test`
+# (tools/bootstrap.py reads ROS_DISTRO; switching rebuilds .venv/ and ros_ws/).
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup demo test bench clean
+.PHONY: setup demo test unit lint bench clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -13,8 +15,15 @@ demo: setup
 test: setup
 	@$(VENV_PY) -m pytest tests
 
+# the tests without DDS (pure-Python cores, files, CLIs): the fast loop
+unit: setup
+	@$(VENV_PY) -m pytest tests/unit
+
+lint: setup
+	@.venv/bin/ruff check .
+
 bench: setup
-	@$(VENV_PY) tools/bench.py --out out/bench.md
+	@$(VENV_PY) benchmarks/run.py --out out/bench.md
 
 clean:
 	rm -rf ros_ws/build ros_ws/install ros_ws/log out

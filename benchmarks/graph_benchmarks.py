@@ -75,7 +75,7 @@ def bench_end_to_end_latency():
         group.stop()
         executor.shutdown()
         node.destroy_node()
-        rclpy.shutdown(context=context)
+        rclpy.try_shutdown(context=context)  # a Ctrl-C may have shut it down (Jazzy: shutdown() raises then)
     if not latencies:
         raise RuntimeError("no fault_state received: " + "\n".join(sum((m.lines[-5:] for m in group.members), [])))
     lat = np.array(latencies) * 1e3

@@ -1,8 +1,8 @@
 """Rewrite the build-machine paths hard-coded in the ROS 2 PyPI wheels' CMake files.
 
-The Kilted wheels export CMake targets whose include directories point at the
-wheel builder's interpreter (``/opt/python/cp311-cp311/...``). Building an
-interface package then fails with "Imported target ... includes non-existent
+The ROS 2 wheels (Jazzy and Kilted alike) export CMake targets whose include
+directories point at the wheel builder's interpreter (``/opt/python/cp311-cp311/...``).
+Building an interface package then fails with "Imported target ... includes non-existent
 path". This step rewrites those two paths to this interpreter's Python include
 directory and numpy's include directory (see ../shared/ros2-from-pypi.md).
 Idempotent: files already rewritten are left alone. Run with the venv's python.

@@ -81,7 +81,11 @@ class RosGraph:
 
     def _spin(self):
         while self._spinning and self.context.ok():
-            self.executor.spin_once(timeout_sec=0.05)
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # Jazzy: RCLError when a signal shuts the context down mid-spin
+                if self.context.ok():
+                    raise
 
     def start(self, package: str, exe: str, name: str | None = None, params: dict | None = None,
               params_file: pathlib.Path | None = None, argv: list | None = None):
@@ -133,5 +137,5 @@ class RosGraph:
         self._thread.join(timeout=2.0)
         self.executor.shutdown()
         self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
+        rclpy.try_shutdown(context=self.context)  # a signal may have shut it down (Jazzy: shutdown() raises then)
         return codes

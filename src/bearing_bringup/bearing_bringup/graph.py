@@ -7,6 +7,8 @@ One definition used by the launch file (``launch/monitor.launch.py``), the
 import pathlib
 from dataclasses import dataclass
 
+from bearing_common import ros_env
+
 
 @dataclass(frozen=True)
 class NodeSpec:
@@ -34,12 +36,7 @@ CONFIG_NAME = "monitor.yaml"
 
 def config_path() -> pathlib.Path:
     """The parameters YAML: the installed ``share/bearing_bringup/config`` copy, else the source tree's."""
-    try:
-        from ament_index_python.packages import get_package_share_directory
-
-        path = pathlib.Path(get_package_share_directory("bearing_bringup")) / "config" / CONFIG_NAME
-        if path.is_file():
-            return path
-    except (ImportError, KeyError):  # PackageNotFoundError is a KeyError
-        pass
+    share = ros_env.package_share_directory("bearing_bringup")
+    if share is not None and (share / "config" / CONFIG_NAME).is_file():
+        return share / "config" / CONFIG_NAME
     return pathlib.Path(__file__).resolve().parent.parent / "config" / CONFIG_NAME

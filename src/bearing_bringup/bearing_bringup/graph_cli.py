@@ -22,6 +22,8 @@ import sys
 import threading
 import time
 
+from bearing_common import ros_env
+
 from .graph import CONFIG_NAME, GRAPH, config_path
 from .process_group import ProcessGroup
 from .state_report import evaluate, format_table
@@ -32,12 +34,8 @@ MISSING_SIMULATOR_RUN_S = 5.0
 
 
 def installed_executable(package: str, executable: str) -> pathlib.Path | None:
-    """The executable ``ros2 run`` would start, found through AMENT_PREFIX_PATH, or None."""
-    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        path = pathlib.Path(prefix) / "lib" / package / executable
-        if prefix and path.exists():
-            return path
-    return None
+    """The executable ``ros2 run`` would start (AMENT_PREFIX_PATH, else the venv's prefix), or None."""
+    return ros_env.executable(package, executable)
 
 
 def missing_parts() -> list:
@@ -63,7 +61,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="bearing-graph", description=__doc__.split("\n\n")[0])
     parser.add_argument("--params", type=pathlib.Path, help=f"parameters YAML (default: the installed {CONFIG_NAME})")
     parser.add_argument("--namespace", default="", help="namespace for all nodes, e.g. motor_7")
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/demo"), help="summary and plots directory")
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/demo"),
+                        help="summary and plots directory")
     parser.add_argument("--timeout", type=float, default=600.0, help="stop after this many wall seconds")
     parser.add_argument("--settle", type=float, default=30.0,
                         help="at most this many wall seconds for the diagnoser to decide the last window "

@@ -40,7 +40,8 @@ class GraphWatcher:
         self.node = rclpy.create_node("graph_watcher", namespace=ns or None, context=self.context)
         self.node.create_subscription(FaultStateMsg, topics.FAULT_STATE.name, self._on_state,
                                       topics.qos(topics.FAULT_STATE, depth=QUEUE))
-        self.node.create_subscription(FaultStateMsg, topics.TRUTH.name, self._on_truth, topics.qos(topics.TRUTH, depth=QUEUE))
+        self.node.create_subscription(FaultStateMsg, topics.TRUTH.name, self._on_truth,
+                                      topics.qos(topics.TRUTH, depth=QUEUE))
         self.node.create_subscription(VibrationChunk, topics.VIBRATION.name, self._on_chunk,
                                       topics.qos(topics.VIBRATION, depth=QUEUE))
         self.executor = SingleThreadedExecutor(context=self.context)
@@ -51,7 +52,11 @@ class GraphWatcher:
 
     def _spin(self):
         while self._running and self.context.ok():
-            self.executor.spin_once(timeout_sec=0.05)
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # Jazzy: RCLError when a signal shuts the context down mid-spin
+                if self.context.ok():
+                    raise
 
     def _on_state(self, msg):
         change = StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp), float(msg.confidence))
@@ -139,4 +144,4 @@ class GraphWatcher:
         self._thread.join(timeout=2.0)
         self.executor.shutdown()
         self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
+        rclpy.try_shutdown(context=self.context)  # a signal may have shut it down (Jazzy: shutdown() raises then)

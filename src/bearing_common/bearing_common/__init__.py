@@ -7,4 +7,5 @@
 * :mod:`.units` — unit constants (standard gravity, inch).
 * :mod:`.parameters` — node parameter specs, declaration and live changes.
 * :mod:`.node_main` — the ``main()`` every node shares (start, clean stop on signals).
+* :mod:`.ros_env` — where the ROS 2 packages and executables are, sourced or not; the distribution.
 """

@@ -9,6 +9,8 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
+from bearing_common import ros_env
+
 from .recording import InputError
 
 #: Interface package of the project; its .msg files give the definitions.
@@ -61,11 +63,22 @@ def _project_typedefs() -> dict:
 def project_typestore():
     """A fresh ``rosbags`` type store: the ROS 2 standard types + ``bearing_msgs``.
 
+    The standard types are those of the installed distribution (:func:`store_name`).
     ``store.generate_msgdef(t, ros_version=2)`` gives the full ros2msg definition text
     (with dependencies such as std_msgs/Header) and ``store.hash_rihs01(t)`` the same type
     hash ROS 2 computes, so bags written with it decode in other tools.
     """
     from rosbags.typesys import Stores, get_typestore
-    store = get_typestore(Stores.ROS2_KILTED)
+    store = get_typestore(Stores[store_name()])
     store.register(_project_typedefs())
     return store
+
+
+def store_name() -> str:
+    """The ``rosbags`` type store of the installed ROS 2 distribution (``ROS2_JAZZY``,
+    ``ROS2_KILTED``, ...); ``LATEST`` for one rosbags does not know. (rosbags 0.11.9: the
+    Jazzy and Kilted stores give the same type hashes for every type both have.)"""
+    from rosbags.typesys import Stores
+    distro = ros_env.ros_distro()
+    name = f"ROS2_{distro.upper()}" if distro else "LATEST"
+    return name if name in Stores.__members__ else "LATEST"
