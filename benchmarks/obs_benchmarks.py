@@ -80,7 +80,7 @@ def _relabel(model, sample_rate: float):
 
 def identification_time(seconds: float = 0.5) -> float:
     """Wall time (s) of :func:`identify_fault_model` on a synthetic 48 kHz OR record."""
-    from bearing_observer.identification import identify_fault_model
+    from bearing_observer.fault_identification import identify_fault_model
 
     model = load_model_set("sim_48k", 48000.0)["outer_race"]
     y = _signal(model, seconds, seed=1)

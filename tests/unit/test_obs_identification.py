@@ -6,17 +6,10 @@ from numpy.testing import assert_allclose
 from scipy import signal
 
 from bearing_common.states import FaultState
-from bearing_observer.identification import (
-    estimate_fault_phase,
-    fit_percent,
-    hw_fit,
-    identify_fault_model,
-    oe_fit,
-    poly_to_reflection,
-    reflection_to_poly,
-)
+from bearing_observer.fault_identification import estimate_fault_phase, identify_fault_model
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
 from bearing_observer.piecewise_linear import MonotonePiecewiseLinear
+from bearing_observer.system_identification import fit_percent, hw_fit, oe_fit, poly_to_reflection, reflection_to_poly
 from bearing_recordings.mat_files import load_mat
 from bearing_sim.simulator import SimulationConfig, simulate
 

@@ -30,8 +30,8 @@ import numpy as np
 
 from bearing_recordings.load import load_recording
 
+from .fault_identification import DEFAULT_ORDERS, N_AVERAGE_IR, identify_fault_model
 from .hw_model import FAULT_TYPES, MODELS_DIR
-from .identification import DEFAULT_ORDERS, N_AVERAGE_IR, identify_fault_model
 
 
 def _sha256(path) -> str:
