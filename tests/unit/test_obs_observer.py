@@ -5,10 +5,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from bearing_common.states import FaultState
+from bearing_observer.fault_identification import identify_fault_model
 from bearing_observer.hw_model import load_model_set
-from bearing_observer.identification import identify_fault_model
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
-from bearing_observer.observer import FaultObserver, ModalFilter, balanced_realization
+from bearing_observer.observer import FaultObserver
+from bearing_observer.realization import ModalFilter, balanced_realization
 from bearing_recordings.mat_files import load_mat
 from bearing_sim.simulator import SimulationConfig, simulate
 
