@@ -191,7 +191,7 @@ def test_phase_recovered_on_simulator(sim48, sim_data, fault):
     obs = FaultObserver(sim48[fault])
     obs.process(y)
     # obs.phase refers to the next sample; advance the identified phase to the same time
-    expect = ident.info["phase_refined"] + TWO_PI * obs.fault_frequency * y.size / FS
+    expect = ident.preprocessing.phase_refined + TWO_PI * obs.fault_frequency * y.size / FS
     err = np.angle(np.exp(1j * (obs.phase - expect)))
     assert abs(err) / TWO_PI * FS / obs.fault_frequency < 1.0  # samples
 

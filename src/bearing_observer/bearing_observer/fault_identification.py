@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy import signal
@@ -43,7 +43,7 @@ from bearing_common.bearings import fault_frequency as kinematic_frequency
 DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
 from bearing_common.states import FaultState, parse_fault
 
-from .hw_model import HWModel
+from .hw_model import HWModel, ModelFit
 from .impulse_trains import TWO_PI, impact_times, impulse_train
 from .piecewise_linear import MonotonePiecewiseLinear
 from .system_identification import N_BREAKPOINTS, fit_percent, hw_fit
@@ -181,6 +181,37 @@ def fit_modulation(amps, t_k, shaft_frequency: float):
 # Whole pipeline
 # ---------------------------------------------------------------------------------------
 @dataclass
+class Preprocessing:
+    """What :func:`identify_fault_model` measured on the record before the fit.
+
+    Frequencies in Hz, phases in rad (:mod:`.impulse_trains` convention). The inner-race
+    fields (eq. 2.58 fit of the per-impact amplitudes) and the outer-race fields
+    (representative period) are None for the other fault. Stored in the model file's
+    provenance (``preprocessing``, None fields left out).
+    """
+
+    kinematic_frequency: float
+    fault_frequency: float
+    phase: float
+    periods: int
+    shaft_phase: float | None = None
+    offset: float | None = None
+    modulation_amplitude: float | None = None
+    modulation_r2: float | None = None
+    n_average: int | None = None
+    plain_average_energy_ratio: float | None = None
+    representative_period: int | None = None
+    representative_correlation: float | None = None
+    mode: str = "thesis"
+    phase_refined: float | None = None
+    identification_seconds: float | None = None
+
+    def to_dict(self) -> dict:
+        """The fields that apply, in field order."""
+        return {k: v for k, v in asdict(self).items() if v is not None}
+
+
+@dataclass
 class IdentificationResult:
     """Everything :func:`identify_fault_model` found (the model plus diagnostics)."""
 
@@ -192,7 +223,7 @@ class IdentificationResult:
     y_series: np.ndarray
     yhat_series: np.ndarray
     id_mask: np.ndarray
-    info: dict = field(default_factory=dict)
+    preprocessing: Preprocessing
 
 
 def _train_for(model_kind_ir, n, fs, freq, phase, fr, theta, c, width, start_time=0.0):
@@ -262,8 +293,7 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
         raise ValueError("record too short: need at least 3 whole fault periods")
     amps, template = rank1(per.matrix)
     width = 1.0 / fs
-    info = {"kinematic_frequency": f_kin, "fault_frequency": freq, "phase": phase,
-            "periods": int(per.matrix.shape[0])}
+    prep = Preprocessing(float(f_kin), float(freq), float(phase), int(per.matrix.shape[0]))
     if is_ir:
         a, theta, c, r2 = fit_modulation(amps, per.impact_times, fr)
         m = np.cos(TWO_PI * fr * per.impact_times + theta) + c
@@ -271,16 +301,16 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
         sel = np.arange(n_avg)
         y_id = (m[sel] @ per.matrix[sel]) / float(m[sel] @ m[sel])
         plain = per.matrix[sel].mean(axis=0)
-        info.update(shaft_phase=theta, offset=c, modulation_amplitude=a, modulation_r2=r2,
-                    n_average=int(n_avg),
-                    plain_average_energy_ratio=float(plain @ plain) / max(float(y_id @ y_id), 1e-300))
+        prep.shaft_phase, prep.offset, prep.modulation_amplitude, prep.modulation_r2 = theta, c, a, r2
+        prep.n_average = int(n_avg)
+        prep.plain_average_energy_ratio = float(plain @ plain) / max(float(y_id @ y_id), 1e-300)
     else:
         theta, c = 0.0, 0.0
         corr = (per.matrix @ template) / np.maximum(np.linalg.norm(per.matrix, axis=1), 1e-300)
         best = int(np.argmax(corr))
         sel = np.array([best])
         y_id = per.matrix[best].copy()
-        info.update(representative_period=best, representative_correlation=float(corr[best]))
+        prep.representative_period, prep.representative_correlation = best, float(corr[best])
     if mode == "thesis":
         # Identification input: the unit train over the segment (impact ``pre`` samples in).
         s0 = per.starts[sel[0]]
@@ -292,7 +322,7 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
         y_id = y[s0:s1].copy()
     else:
         raise ValueError(f"mode must be 'thesis' or 'series', got {mode!r}")
-    info["mode"] = mode
+    prep.mode = mode
     fit = hw_fit(u_id, y_id, nb, nf, nk, n_breakpoints)
     lin_in = MonotonePiecewiseLinear.gain(1.0)
     model = HWModel(fault_type=fault_type, sample_rate=fs, rpm=float(rpm), fault_frequency=freq,
@@ -301,7 +331,7 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
     yhat_id = model.simulate(u_id)
     # Align the strictly periodic train with the record (sub-sample phase scan, ±1/4 period)
     phase = refine_phase(model, y, phase, fr, theta, c)
-    info["phase_refined"] = phase
+    prep.phase_refined = phase
     # time series with the identified train (strictly periodic)
     u_series = _train_for(is_ir, y.size, fs, freq, phase, fr, theta, c, width)
     yhat_series = model.simulate(u_series)
@@ -314,32 +344,31 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
     held[: per.starts[0]] = False  # before the first whole period: no full model response
     per_fits = [fit_percent(y[s:s + per.length], yhat_series[s:s + per.length])
                 for i, s in enumerate(per.starts) if i not in set(sel.tolist())]
-    model.fit = {
-        "identification": fit.fit,
-        "identification_linear_only": fit.fit_linear,
-        "held_back": fit_percent(y[held], yhat_series[held]),
-        "held_back_periods_median": float(np.median(per_fits)) if per_fits else None,
-        "time_series": fit_percent(y[per.starts[0]:], yhat_series[per.starts[0]:]),
+    model.fit = ModelFit(
+        identification=fit.fit,
+        identification_linear_only=fit.fit_linear,
+        held_back=fit_percent(y[held], yhat_series[held]),
+        held_back_periods_median=float(np.median(per_fits)) if per_fits else None,
+        time_series=fit_percent(y[per.starts[0]:], yhat_series[per.starts[0]:]),
         # the same with the single least-squares amplitude: how much a strictly periodic
         # train can explain at all (real impacts wander; see shared/diagnosis-notes.md)
-        "time_series_ls_amplitude": _ls_scaled_fit(y[per.starts[0]:], yhat_series[per.starts[0]:]),
-        "identification_samples": int(y_id.size),
-        "held_back_samples": int(held.sum()),
-        "series_seconds": y.size / fs,
-    }
-    info["identification_seconds"] = time.perf_counter() - t0
+        time_series_ls_amplitude=_ls_scaled_fit(y[per.starts[0]:], yhat_series[per.starts[0]:]),
+        identification_samples=int(y_id.size),
+        held_back_samples=int(held.sum()),
+        series_seconds=y.size / fs,
+    )
+    prep.identification_seconds = time.perf_counter() - t0
     model.provenance = dict(provenance or {})
     model.provenance.setdefault("date", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
-    model.provenance["preprocessing"] = {
-        k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in info.items()}
-    return IdentificationResult(model, u_id, y_id, yhat_id, u_series, y, yhat_series, id_mask, info)
+    model.provenance["preprocessing"] = prep.to_dict()
+    return IdentificationResult(model, u_id, y_id, yhat_id, u_series, y, yhat_series, id_mask, prep)
 
 
-def _ls_scaled_fit(y, yhat):
+def _ls_scaled_fit(y, yhat) -> tuple[float, float]:
     """(fit %, gain) of ``gain * yhat`` with the least-squares gain."""
     den = float(np.sum(yhat * yhat))
     gain = float(np.sum(y * yhat)) / den if den > 0 else 0.0
-    return [fit_percent(y, gain * yhat), gain]
+    return fit_percent(y, gain * yhat), gain
 
 
 def refine_phase(model: HWModel, y, phase: float, shaft_frequency: float, theta: float,

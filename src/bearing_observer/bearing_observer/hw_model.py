@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +54,47 @@ DEFAULT_SETS = {
 
 class ModelFileError(ValueError):
     """A model file is missing, corrupt or does not match what the caller needs."""
+
+
+@dataclass
+class ModelFit:
+    """How well one model fits its record (%, MATLAB ``compare``: ``100 (1 - |y - yhat| / |y - mean(y)|)``).
+
+    Attributes
+    ----------
+    identification : float
+        On the identification data.
+    identification_linear_only : float
+        The same with the output nonlinearity replaced by the identity (OE initialisation).
+    held_back : float or None
+        On the rest of the record (None when nothing is held back).
+    held_back_periods_median : float or None
+        Median over the held-back fault periods.
+    time_series : float
+        On the whole record, driven by a strictly periodic train.
+    time_series_ls_amplitude : (float, float)
+        ``(fit %, gain)`` of the time series with the single least-squares amplitude.
+    identification_samples, held_back_samples : int
+    series_seconds : float
+        Length of the record (s).
+    """
+
+    identification: float
+    identification_linear_only: float
+    held_back: float | None
+    held_back_periods_median: float | None
+    time_series: float
+    time_series_ls_amplitude: tuple[float, float]
+    identification_samples: int
+    held_back_samples: int
+    series_seconds: float
+
+    @classmethod
+    def from_dict(cls, d: dict) -> ModelFit:
+        unknown = set(d) - {f.name for f in fields(cls)}
+        if unknown:
+            raise ValueError(f"fit: unknown keys {', '.join(sorted(unknown))}")
+        return cls(**{**d, "time_series_ls_amplitude": tuple(d["time_series_ls_amplitude"])})
 
 
 @dataclass
@@ -83,8 +124,8 @@ class HWModel:
         Offset ``c`` of eq. 2.58 (inner race); unused for the outer race (eq. 2.55).
     pulse_width : float
         Pulse width of the train (s).
-    fit : dict
-        Fit percentages (MATLAB ``compare`` definition) and related numbers.
+    fit : ModelFit or None
+        Fit figures on the identification record (None for a model not identified here).
     provenance : dict
         Data source, command, date.
     """
@@ -101,7 +142,7 @@ class HWModel:
     output_nonlinearity: MonotonePiecewiseLinear
     train_offset: float = 0.0
     pulse_width: float | None = None
-    fit: dict = field(default_factory=dict)
+    fit: ModelFit | None = None
     provenance: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -187,7 +228,7 @@ class HWModel:
                 "sample_rate": "Hz", "fault_frequency": "Hz", "rpm": "rev/min",
                 "pulse_width": "s", "fit": "percent, 100*(1-|y-yhat|/|y-mean(y)|)",
             },
-            "fit": _jsonable(self.fit),
+            "fit": _jsonable(asdict(self.fit)) if self.fit is not None else {},
             "provenance": _jsonable(self.provenance),
         }
 
@@ -205,7 +246,7 @@ class HWModel:
             output_nonlinearity=MonotonePiecewiseLinear.from_dict(d["output_nonlinearity"]),
             train_offset=float(d["train"].get("offset", 0.0)),
             pulse_width=float(d["train"]["pulse_width"]),
-            fit=dict(d.get("fit", {})), provenance=dict(d.get("provenance", {})),
+            fit=ModelFit.from_dict(d["fit"]) if d.get("fit") else None, provenance=dict(d.get("provenance", {})),
         )
 
     def save(self, path) -> Path:

@@ -131,11 +131,11 @@ def main(argv=None) -> int:
                 rows = []
                 for orders in ORDER_GRID:
                     r = identify_fault_model(y, orders=orders, provenance=dict(prov), **base)
-                    rows.append((r.model.fit["held_back"], orders, r))
+                    rows.append((r.model.fit.held_back, orders, r))
                     fit = r.model.fit
                     print(f"{fault} nb={orders[0]:2d} nf={orders[1]:2d} nk={orders[2]} "
-                          f"fit id {fit['identification']:6.2f} % held-back {fit['held_back']:6.2f} % "
-                          f"series {fit['time_series']:6.2f} %", flush=True)
+                          f"fit id {fit.identification:6.2f} % held-back {fit.held_back:6.2f} % "
+                          f"series {fit.time_series:6.2f} %", flush=True)
                 best = max(rows, key=lambda row: row[0])
                 result = best[2]
                 result.model.provenance["order_search"] = [
@@ -151,7 +151,8 @@ def main(argv=None) -> int:
         m = result.model
         print(json.dumps({"fault": fault, "file": str(path),
                           "orders": [m.nb, m.nf, m.nk],
-                          "fit": {k: m.fit[k] for k in ("identification", "held_back", "time_series")},
+                          "fit": {"identification": m.fit.identification, "held_back": m.fit.held_back,
+                                  "time_series": m.fit.time_series},
                           "fault_frequency": m.fault_frequency,
                           "seconds": round(time.perf_counter() - t0, 2)}))
     return 0
