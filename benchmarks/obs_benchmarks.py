@@ -20,8 +20,8 @@ import time
 
 import numpy as np
 
-from bearing_observer.hw_model import load_model_set
 from bearing_observer.impulse_trains import impulse_train
+from bearing_observer.model_sets import load_model_set
 from bearing_observer.observer import FaultObserver
 
 
@@ -85,7 +85,7 @@ def identification_time(seconds: float = 0.5) -> float:
     model = load_model_set("sim_48k", 48000.0)["outer_race"]
     y = _signal(model, seconds, seed=1)
     t0 = time.perf_counter()
-    identify_fault_model(y, 48000.0, model.rpm, "outer_race", refine_frequency=False)
+    identify_fault_model(y, 48000.0, model.rpm, "outer_race", model.bearing, refine_frequency=False)
     return time.perf_counter() - t0
 
 

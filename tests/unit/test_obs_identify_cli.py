@@ -4,8 +4,8 @@ import json
 
 import pytest
 
-from bearing_observer.hw_model import load_model_set
 from bearing_observer.identify_cli import main
+from bearing_observer.model_sets import load_model_set
 
 
 def test_bad_arguments(tmp_path, capsys):
@@ -15,8 +15,14 @@ def test_bad_arguments(tmp_path, capsys):
     assert main(["--source", "x.mat", "--fault", "outer_race", "--sample-rate", "12000",
                  "--model-set", "t", "--out", str(tmp_path)]) == 1
     assert "no such file" in capsys.readouterr().err
+    assert main(["--source", "sim", "--model-set", "t", "--out", str(tmp_path)]) == 1
+    assert "--source sim needs --sample-rate" in capsys.readouterr().err
+    assert main(["--source", "sim", "--sample-rate", "12000", "--model-set", "none"]) == 2
+    assert "invalid model set name 'none'" in capsys.readouterr().err
+    assert main(["--source", "sim", "--sample-rate", "12000", "--model-set", "t", "--bearing", "nope"]) == 2
+    assert "unknown bearing 'nope'" in capsys.readouterr().err
     with pytest.raises(SystemExit):
-        main(["--source", "sim", "--model-set", "t"])  # --sample-rate missing
+        main(["--sample-rate", "12000", "--model-set", "t"])  # --source missing
 
 
 def test_identifies_cwru_set_with_provenance(tmp_path, capsys, cwru_record):

@@ -6,8 +6,8 @@ from numpy.testing import assert_allclose
 
 from bearing_common.states import FaultState
 from bearing_observer.fault_identification import identify_fault_model
-from bearing_observer.hw_model import load_model_set
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
+from bearing_observer.model_sets import load_model_set
 from bearing_observer.observer import FaultObserver
 from bearing_observer.realization import ModalFilter, balanced_realization
 from bearing_recordings.mat_files import load_mat
@@ -187,7 +187,7 @@ def test_or_and_ir_observers_discriminate_on_simulator(sim48, sim_data):
 @pytest.mark.parametrize("fault", ["outer_race", "inner_race"])
 def test_phase_recovered_on_simulator(sim48, sim_data, fault):
     y = sim_data[fault]
-    ident = identify_fault_model(y, FS, 1800.0, fault, refine_frequency=False)
+    ident = identify_fault_model(y, FS, 1800.0, fault, "6205", refine_frequency=False)
     obs = FaultObserver(sim48[fault])
     obs.process(y)
     # obs.phase refers to the next sample; advance the identified phase to the same time

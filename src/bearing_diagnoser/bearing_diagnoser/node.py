@@ -23,7 +23,7 @@ from bearing_common.states import FaultState
 from bearing_msgs.msg import FaultState as FaultStateMsg
 from bearing_msgs.msg import Residual, ShaftSpeed
 from bearing_observer.chunk_stream import ChunkStream
-from bearing_observer.hw_model import DEFAULT_SETS
+from bearing_observer.model_sets import SHIPPED
 
 from .decision import Diagnoser, config_for
 from .diagnoser_node_config import PARAMETERS, health
@@ -54,9 +54,9 @@ class DiagnoserNode(Node):
 
     def warm_thresholds(self) -> None:
         """Derive the thresholds of every model set this node may meet (about 1 s each)."""
-        for (_, rate), name in DEFAULT_SETS.items():
+        for name, entry in SHIPPED.items():
             if self.values["model_set"] in ("", name):
-                Diagnoser(self._config(name), model_set=name, sample_rate=rate).thresholds()
+                Diagnoser(self._config(name), model_set=name, sample_rate=entry.sample_rate).thresholds()
 
     def _config(self, name: str):
         overrides = {}

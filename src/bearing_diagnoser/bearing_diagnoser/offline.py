@@ -25,10 +25,6 @@ from bearing_recordings.resampling import resample
 
 from .decision import HYPOTHESES, Decision, Diagnoser, config_for
 
-#: Model-set rates (Hz) and sources; mirrors bearing_observer.hw_model.DEFAULT_SETS.
-MODEL_SETS = {"sim_48k": ("simulator", 48000.0), "sim_12k": ("simulator", 12000.0),
-              "cwru_de_6205": ("cwru", 12000.0)}
-
 #: Chunk length (s) fed to the observers, as the simulator node publishes (0.01 s).
 CHUNK_S = 0.01
 
@@ -38,32 +34,27 @@ def _log(msg: str, quiet: bool = False):
         print(f"bearing-diagnose: {msg}", file=sys.stderr)
 
 
-def model_set_rate(name: str) -> float:
-    """Sample rate (Hz) of a model set (from bearing_observer when it knows the set)."""
+def model_set_rate(name: str) -> float | None:
+    """Sample rate (Hz) of a model set (bearing_observer.model_sets); None: any (``none``)."""
+    from bearing_observer.hw_model import ModelFileError
+    from bearing_observer.model_sets import model_set
     try:
-        from bearing_observer.hw_model import DEFAULT_SETS
-        for (_src, rate), set_name in DEFAULT_SETS.items():
-            if set_name == name:
-                return float(rate)
-    except ImportError:
-        pass
-    if name in MODEL_SETS:
-        return MODEL_SETS[name][1]
-    raise InputError(f"unknown model set {name!r}; known: {', '.join(MODEL_SETS)}")
+        return model_set(name).sample_rate
+    except ModelFileError as exc:
+        raise InputError(str(exc)) from None
 
 
 def choose_model_set(rec: Recording, requested: str | None = None) -> str:
-    """The model set for ``rec``: ``requested`` if given, else by source and rate.
-
-    Simulator output → ``sim_48k`` (``sim_12k`` if recorded at or below 12 kHz);
-    CWRU recordings → ``cwru_de_6205``; bags → by the source they carry.
+    """The model set for ``rec``: ``requested`` if given, else the registry's rule
+    (bearing_observer.model_sets.choose_model_set, resampling allowed) for its source,
+    rate and bearing (default 6205): simulator → ``sim_48k`` / ``sim_12k``, CWRU →
+    ``cwru_de_6205``, anything else → ``none``.
     """
+    from bearing_observer.model_sets import choose_model_set as registry_choice
     if requested:
         model_set_rate(requested)  # validates the name
         return requested
-    if rec.source == "cwru":
-        return "cwru_de_6205"
-    return "sim_12k" if rec.sample_rate <= 12000.0 else "sim_48k"
+    return registry_choice(rec.source, rec.sample_rate, rec.bearing or None, resample=True).name
 
 
 @dataclass
@@ -175,7 +166,7 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         raise InputError(f"unknown method {method!r}; expected model or envelope")
     ms = choose_model_set(rec, model_set)
     _log(f"model set {ms}" + (" (chosen from the input)" if not model_set else ""), quiet)
-    fs = model_set_rate(ms)
+    fs = model_set_rate(ms) or rec.sample_rate
     x = rec.accel
     if abs(rec.sample_rate - fs) > 1e-9 * fs:
         _log(f"resampling {rec.sample_rate:g} Hz -> {fs:g} Hz (anti-aliased, resample_poly) for model set {ms}",

@@ -37,10 +37,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy import signal
 
-from bearing_common.bearings import CATALOG
-from bearing_common.bearings import fault_frequency as kinematic_frequency
-
-DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import FaultState, parse_fault
 
 from .hw_model import HWModel, ModelFit
@@ -233,10 +230,9 @@ def _train_for(model_kind_ir, n, fs, freq, phase, fr, theta, c, width, start_tim
     return impulse_train(n, fs, freq, phase, start_time, pulse_width=width)
 
 
-def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
+def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bearing | str, orders=None,
                          n_breakpoints: int = N_BREAKPOINTS, n_average: int = N_AVERAGE_IR,
-                         refine_frequency: bool = True, provenance: dict | None = None,
-                         geometry=DRIVE_END_6205, mode: str = "thesis",
+                         refine_frequency: bool = True, provenance: dict | None = None, mode: str = "thesis",
                          n_series: int = 8) -> IdentificationResult:
     """Identify the HW model of one fault type from a record of that fault.
 
@@ -250,6 +246,9 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
         Shaft speed (rev/min).
     fault : FaultState or str
         ``outer_race`` or ``inner_race``.
+    bearing : Bearing or str
+        The machine's bearing (anything :func:`bearing_common.bearings.load_bearing` reads):
+        gives the kinematic fault frequency; recorded in the model's provenance.
     orders : (nb, nf, nk), optional
         Linear-block orders; default :data:`DEFAULT_ORDERS`.
     n_breakpoints : int
@@ -285,7 +284,8 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
     nb, nf, nk = orders or DEFAULT_ORDERS[fault_type]
     fs = float(sample_rate)
     fr = rpm / 60.0
-    f_kin = kinematic_frequency(geometry, state, rpm)
+    bearing = load_bearing(bearing)
+    f_kin = bearing.frequencies(rpm).of(state)
     freq = refine_fault_frequency(y, fs, f_kin) if refine_frequency else f_kin
     phase = estimate_fault_phase(y, fs, freq)
     per = cut_periods(y, fs, freq, phase)
@@ -360,6 +360,7 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
     prep.identification_seconds = time.perf_counter() - t0
     model.provenance = dict(provenance or {})
     model.provenance.setdefault("date", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+    model.provenance["bearing"] = bearing.to_dict()
     model.provenance["preprocessing"] = prep.to_dict()
     return IdentificationResult(model, u_id, y_id, yhat_id, u_series, y, yhat_series, id_mask, prep)
 

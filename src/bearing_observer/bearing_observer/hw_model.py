@@ -20,11 +20,16 @@ Model file format (JSON, ``format_version`` 1), one fault type per file::
       "output_nonlinearity": {"x": [...], "y": [...]},  # g, model units -> m/s²
       "units": {...},
       "fit": {"identification": %, "held_back": %, "time_series": %, ...},
-      "provenance": {"source": ..., "command": ..., "date": ISO 8601 UTC, ...}
+      "provenance": {"source": ..., "command": ..., "date": ISO 8601 UTC,
+                     "bearing": {...}, ...}   # the bearing identified for (bearing_common YAML form, SI)
     }
 
-A *model set* is a directory ``models/<set_name>/`` holding ``outer_race.json`` and
-``inner_race.json`` identified from the same source at the same sample rate.
+``fault_order`` was measured on the identification record of a machine with
+``provenance.bearing``; an observer of another bearing uses that bearing's kinematic order
+instead (:func:`bearing_observer.observer.fault_order`).
+
+A *model set* is a directory holding ``outer_race.json`` and ``inner_race.json`` identified
+on one machine at one sample rate; :mod:`.model_sets` keeps the registry.
 """
 
 from __future__ import annotations
@@ -37,20 +42,14 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
+from bearing_common.bearings import Bearing, bearing_from_dict
+
 from .piecewise_linear import MonotonePiecewiseLinear
 
 FORMAT_VERSION = 1
 KIND = "bearing_observer.hw_model"
 FAULT_TYPES = ("outer_race", "inner_race")
 MODELS_DIR = Path(__file__).resolve().parent / "models"
-
-#: Model set per (data source, sample rate in Hz).
-DEFAULT_SETS = {
-    ("simulator", 48000.0): "sim_48k",
-    ("simulator", 12000.0): "sim_12k",
-    ("cwru", 12000.0): "cwru_de_6205",
-}
-
 
 class ModelFileError(ValueError):
     """A model file is missing, corrupt or does not match what the caller needs."""
@@ -177,6 +176,12 @@ class HWModel:
         return self.fault_type == "inner_race"
 
     @property
+    def bearing(self) -> Bearing | None:
+        """The bearing the model was identified for (``provenance["bearing"]``), None if not recorded."""
+        d = self.provenance.get("bearing")
+        return None if d is None else bearing_from_dict(d, "model provenance bearing")
+
+    @property
     def input_gain(self) -> float:
         """Slope of ``f`` at 0 (the input nonlinearity is a gain, see identification)."""
         return self.input_nonlinearity.slope_at(0.0)
@@ -257,6 +262,12 @@ class HWModel:
         return path
 
 
+def same_bearing(a: Bearing, b: Bearing) -> bool:
+    """True when ``a`` and ``b`` have the same characteristic orders (eqs. 2.51-2.54), whatever their names."""
+    oa, ob = a.orders(), b.orders()
+    return all(math.isclose(getattr(oa, k), getattr(ob, k), rel_tol=1e-9) for k in ("ftf", "bsf", "bpfo", "bpfi"))
+
+
 def _jsonable(obj):
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
@@ -302,6 +313,7 @@ def load(path, sample_rate: float | None = None, fault_type: str | None = None) 
             f"(this code reads {FORMAT_VERSION})")
     try:
         model = HWModel.from_dict(d)
+        model.bearing  # noqa: B018 (validates the recorded bearing)
     except (KeyError, TypeError, ValueError) as exc:
         raise ModelFileError(f"model file {path} is corrupt: {type(exc).__name__}: {exc}") from None
     if sample_rate is not None and not math.isclose(model.sample_rate, float(sample_rate),
@@ -312,56 +324,3 @@ def load(path, sample_rate: float | None = None, fault_type: str | None = None) 
     if fault_type is not None and model.fault_type != fault_type:
         raise ModelFileError(f"{path} holds a {model.fault_type} model, not {fault_type}")
     return model
-
-
-def model_set_dir(name: str, root=None) -> Path:
-    """Directory of the model set ``name`` (under the package's ``models/`` by default)."""
-    if not name or "/" in name or name.startswith("."):
-        raise ModelFileError(f"invalid model set name {name!r}")
-    return Path(root) / name if root is not None else MODELS_DIR / name
-
-
-def available_model_sets(root=None) -> list[str]:
-    """Names of the model sets shipped (directories holding both fault models)."""
-    base = Path(root) if root is not None else MODELS_DIR
-    if not base.is_dir():
-        return []
-    return sorted(p.name for p in base.iterdir()
-                  if p.is_dir() and all((p / f"{ft}.json").is_file() for ft in FAULT_TYPES))
-
-
-def load_model_set(name: str, sample_rate: float | None = None, root=None) -> dict[str, HWModel]:
-    """Load ``models/<name>/{outer_race,inner_race}.json``.
-
-    Returns
-    -------
-    dict
-        ``{"outer_race": HWModel, "inner_race": HWModel}``.
-
-    Raises
-    ------
-    ModelFileError
-        Unknown set, missing/corrupt file, or sample-rate mismatch.
-    """
-    d = model_set_dir(name, root)
-    if not d.is_dir():
-        raise ModelFileError(
-            f"unknown model set {name!r} (no directory {d}); available: "
-            f"{', '.join(available_model_sets(root)) or 'none'}")
-    return {ft: load(d / f"{ft}.json", sample_rate=sample_rate, fault_type=ft) for ft in FAULT_TYPES}
-
-
-def default_model_set(source: str, sample_rate: float) -> str:
-    """Name of the model set for data from ``source`` (``simulator`` or ``cwru``) at ``sample_rate``.
-
-    Raises
-    ------
-    ModelFileError
-        No set for that source and rate.
-    """
-    key = (str(source).lower(), float(sample_rate))
-    if key not in DEFAULT_SETS:
-        known = ", ".join(f"{s} @ {r:g} Hz" for s, r in DEFAULT_SETS)
-        raise ModelFileError(
-            f"no model set for source {source!r} at {float(sample_rate):g} Hz; known: {known}")
-    return DEFAULT_SETS[key]

@@ -23,7 +23,8 @@ from bearing_common.states import parse_fault
 from bearing_msgs.msg import Residual, ShaftSpeed, VibrationChunk
 
 from .chunk_stream import ChunkStream
-from .hw_model import ModelFileError, default_model_set
+from .hw_model import ModelFileError
+from .model_sets import choose_model_set
 from .kernels import warm_up
 from .observer import FaultObserver
 from .observer_node_config import PARAMETERS, default_node_name
@@ -64,7 +65,7 @@ class ObserverNode(Node):
     def _ensure_observer(self, msg: VibrationChunk) -> bool:
         """Build (or rebuild for a new rate or source) the observer; False when no model fits."""
         try:
-            wanted = self.values["model_set"] or default_model_set(msg.source, msg.sample_rate)
+            wanted = self.values["model_set"] or choose_model_set(msg.source, msg.sample_rate, None).name
             if self.observer is not None and wanted == self.model_set and self.observer.sample_rate == msg.sample_rate:
                 return True
             self.observer = FaultObserver.from_model_set(wanted, self.fault.label, self.rpm, msg.sample_rate)

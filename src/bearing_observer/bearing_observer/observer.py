@@ -51,21 +51,20 @@ The estimates apply from the next update boundary on (causal, one update of dela
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft as sp_fft
 from scipy import signal
 
-from bearing_common.bearings import CATALOG
-from bearing_common.bearings import fault_frequency as kinematic_frequency
-
-DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import FaultState
 
-from .hw_model import HWModel, load_model_set
+from .hw_model import HWModel, same_bearing
 from .impulse_trains import TWO_PI, impulse_train, modulated_train_components
 from .kernels import fold_energy
+from .model_sets import NONE, load_model_set
 from .realization import ModalFilter, balanced_realization, observer_gain
 
 
@@ -93,6 +92,28 @@ class ObserverOutput:
     drive: np.ndarray
 
 
+class BearingMismatchWarning(UserWarning):
+    """The observer watches another bearing than its model was identified for."""
+
+
+def fault_order(model: HWModel, bearing: Bearing | None) -> tuple[float, str]:
+    """Impacts per shaft revolution the observer uses, and a warning text ("" when none).
+
+    The model's own order (measured on its identification record, slip included) when
+    ``bearing`` is None or has the orders of the model's bearing; otherwise the kinematic
+    order of ``bearing`` (eqs. 2.53-2.54), with a warning: the model's dynamics were then
+    identified on a machine with another bearing (or on one whose bearing is not recorded).
+    """
+    if bearing is None or (model.bearing is not None and same_bearing(bearing, model.bearing)):
+        return model.fault_order, ""
+    fault = FaultState.OUTER_RACE if model.fault_type == "outer_race" else FaultState.INNER_RACE
+    identified_for = model.bearing.name if model.bearing is not None else "an unrecorded bearing"
+    where = model.provenance.get("model_set", "this model")
+    return bearing.orders().of(fault), (
+        f"{where} ({model.fault_type}) was identified for {identified_for}, not {bearing.name}: "
+        f"using {bearing.name}'s kinematic fault frequency with the other machine's dynamics "
+        "(identify a model set for this machine, or use model set 'none')")
+
 
 class FaultObserver:
     """HW observer of one fault type (Fig. 3.1); streaming, chunk-invariant.
@@ -105,6 +126,10 @@ class FaultObserver:
         Shaft speed (rev/min); default the model's.
     sample_rate : float, optional
         Hz; must equal the model's.
+    bearing : Bearing or str, optional
+        The watched bearing (anything :func:`bearing_common.bearings.load_bearing` reads);
+        default the model's. Its fault order is :func:`fault_order`'s: another bearing
+        than the model's gives a :class:`BearingMismatchWarning` and runs on.
     poles : "model" | "contracted" | array_like
         Observer pole choice (module docstring). Default ``"model"`` (L = 0).
     contraction : float
@@ -115,9 +140,10 @@ class FaultObserver:
         Seconds between estimate updates (at fixed sample counts).
     min_explained : float
         Minimum explained energy fraction for the train drive to be used.
-    drive : "adaptive" | "off" | "fixed"
-        ``adaptive``: online phase and amplitude; ``off``: no train input (u = 0);
-        ``fixed``: use ``phase`` and ``gains`` as given.
+    drive : "adaptive" | "phase" | "off" | "fixed"
+        ``adaptive``: online phase and amplitude; ``phase``: online phase, no train input
+        (u = 0: the train is published, not subtracted); ``off``: no train input, the
+        train at phase 0; ``fixed``: use ``phase`` and ``gains`` as given.
     phase : float, optional
         Fixed fault phase (rad) at the observer's time 0, for ``drive="fixed"``.
     gains : sequence of float, optional
@@ -127,15 +153,19 @@ class FaultObserver:
     """
 
     def __init__(self, model: HWModel, rpm: float | None = None, sample_rate: float | None = None,
-                 poles="model", contraction: float = 0.95, window: float = 0.1,
+                 bearing: Bearing | str | None = None, poles="model", contraction: float = 0.95, window: float = 0.1,
                  update_interval: float = 0.1, min_explained: float = 0.4,
                  drive: str = "adaptive", phase: float | None = None, gains=None):
         if sample_rate is not None and not math.isclose(sample_rate, model.sample_rate, rel_tol=1e-9):
             raise ValueError(f"model identified at {model.sample_rate:g} Hz, observer asked for "
                              f"{sample_rate:g} Hz: resample or pick a model set for that rate")
-        if drive not in ("adaptive", "off", "fixed"):
-            raise ValueError("drive must be 'adaptive', 'off' or 'fixed'")
+        if drive not in ("adaptive", "phase", "off", "fixed"):
+            raise ValueError("drive must be 'adaptive', 'phase', 'off' or 'fixed'")
         self.model = model
+        self.bearing = model.bearing if bearing is None else load_bearing(bearing)
+        self.fault_order, mismatch = fault_order(model, None if bearing is None else self.bearing)
+        if mismatch:
+            warnings.warn(mismatch, BearingMismatchWarning, stacklevel=2)
         self.sample_rate = float(model.sample_rate)
         self.fault = FaultState.OUTER_RACE if model.fault_type == "outer_race" else FaultState.INNER_RACE
         self.poles_choice = poles
@@ -155,9 +185,7 @@ class FaultObserver:
             # L = 0: z_hat = B/F w exactly; run the identified polynomials directly.
             self._modal = None
         self._tf_w = (model.b, model.f) if not np.any(self.L) else None
-        self._template_cache = {}
-        # unit-impulse response template of the linear block (for phase estimation)
-        self._template_len = None
+        self._template_cache = {}  # folded unit-impulse response energy (phase estimation)
         self._noise_gain = None
         self._fixed_phase = phase
         self._fixed_gains = None if gains is None else np.asarray(gains, dtype=float).ravel()
@@ -169,15 +197,24 @@ class FaultObserver:
     # ------------------------------------------------------------------------------------
     @classmethod
     def from_model_set(cls, set_name: str, fault_type: str, rpm: float | None = None,
-                       sample_rate: float | None = None, **kwargs) -> FaultObserver:
-        """Observer for ``fault_type`` from the shipped model set ``set_name``."""
-        models = load_model_set(set_name, sample_rate=sample_rate)
-        return cls(models[fault_type], rpm=rpm, sample_rate=sample_rate, **kwargs)
+                       sample_rate: float | None = None, bearing: Bearing | str | None = None,
+                       root=None, **kwargs) -> FaultObserver:
+        """Observer for ``fault_type`` from the model set ``set_name`` (:mod:`.model_sets`).
+
+        Set ``none`` (no model) needs ``rpm`` and ``sample_rate`` and runs with
+        ``drive="phase"``: residual = y, estimate = 0, the train's phase estimated online.
+        """
+        models = load_model_set(set_name, sample_rate=sample_rate, root=root, bearing=bearing)
+        if set_name == NONE:
+            if rpm is None:
+                raise ValueError(f"model set {NONE!r} states no shaft speed: give rpm")
+            kwargs.setdefault("drive", "phase")
+        return cls(models[fault_type], rpm=rpm, sample_rate=sample_rate, bearing=bearing, **kwargs)
 
     # ------------------------------------------------------------------------------------
     @property
     def fault_frequency(self) -> float:
-        """Current impact frequency (Hz): model fault order × shaft frequency."""
+        """Current impact frequency (Hz): :attr:`fault_order` × shaft frequency."""
         return self._freq
 
     @property
@@ -197,8 +234,7 @@ class FaultObserver:
         self.rpm = rpm
         self._cached_trains = None
         self._fr = rpm / 60.0
-        self._freq = self.model.fault_order * self._fr
-        self._kinematic = kinematic_frequency(DRIVE_END_6205, self.fault, rpm)
+        self._freq = self.fault_order * self._fr
 
     def reset(self) -> None:
         """Zero the observer state and forget the phase/amplitude estimates."""
@@ -264,7 +300,7 @@ class FaultObserver:
         Pulse positions are computed per sample from the speed anchor, so a slice equals
         the block rendered on its own (to rounding of the sub-sample position, ~1e-12) and
         does not depend on how the stream is chunked."""
-        plain_only = self.drive_mode == "off"
+        plain_only = self.drive_mode in ("phase", "off")
         self._cached_trains = (n_start, n_end) + self._trains(n_end - n_start, n_start, plain_only)
 
     def _block_trains(self, n: int):
@@ -321,6 +357,9 @@ class FaultObserver:
         den = cm - 2.0 * c0 + cp
         frac = 0.5 * (cm - cp) / den if den < 0 else 0.0
         self._phase_c = ((lag + min(max(float(frac), -0.5), 0.5)) / n_bins) % 1.0
+        if self.drive_mode == "phase":
+            self._cached_trains = None  # rendered again at the new phase
+            return
         # regressors over the window (zero state at the window start; first part discarded);
         # the trains are rendered through the next update interval in the same call
         self._cache_trains(self._n - z.size, self._n + self.update_n)
@@ -368,7 +407,7 @@ class FaultObserver:
         out_drive[sl] = u
         # bookkeeping: sample count and the estimation window
         self._n += n
-        if self.drive_mode == "adaptive":
+        if self.drive_mode in ("adaptive", "phase"):
             W = self.window_n
             self._win_z = np.concatenate([self._win_z, z_t])[-W:]
             if self._n % self.update_n == 0:
