@@ -25,3 +25,15 @@ def cwru_record():
                         "set BEARING_CWRU_DIR to use another copy)")
         return path
     return find
+
+
+@pytest.fixture
+def shared_recording():
+    """Path of a recording under ../shared/data/<rig>/ (cwru, mfpt, hit-sm); skips with the reason when absent."""
+    def find(rig: str, name: str) -> pathlib.Path:
+        path = (cwru_dir() if rig == "cwru" else SHARED_DIR / "data" / rig) / name
+        if not path.is_file():
+            pytest.skip(f"recording {rig}/{name} not found at {path} (provided beside the repository as "
+                        "../shared/data in CI; never committed)")
+        return path
+    return find
