@@ -59,7 +59,7 @@ from scipy import fft as sp_fft
 from scipy import signal
 
 from bearing_common.bearings import Bearing, load_bearing
-from bearing_common.states import FaultState
+from bearing_common.states import parse_fault
 
 from .hw_model import HWModel, same_bearing
 from .impulse_trains import TWO_PI, impulse_train, modulated_train_components
@@ -106,10 +106,9 @@ def fault_order(model: HWModel, bearing: Bearing | None) -> tuple[float, str]:
     """
     if bearing is None or (model.bearing is not None and same_bearing(bearing, model.bearing)):
         return model.fault_order, ""
-    fault = FaultState.OUTER_RACE if model.fault_type == "outer_race" else FaultState.INNER_RACE
     identified_for = model.bearing.name if model.bearing is not None else "an unrecorded bearing"
     where = model.provenance.get("model_set", "this model")
-    return bearing.orders().of(fault), (
+    return bearing.orders().of(parse_fault(model.fault_type)), (
         f"{where} ({model.fault_type}) was identified for {identified_for}, not {bearing.name}: "
         f"using {bearing.name}'s kinematic fault frequency with the other machine's dynamics "
         "(identify a model set for this machine, or use model set 'none')")
@@ -167,7 +166,7 @@ class FaultObserver:
         if mismatch:
             warnings.warn(mismatch, BearingMismatchWarning, stacklevel=2)
         self.sample_rate = float(model.sample_rate)
-        self.fault = FaultState.OUTER_RACE if model.fault_type == "outer_race" else FaultState.INNER_RACE
+        self.fault = parse_fault(model.fault_type)
         self.poles_choice = poles
         self._contraction = float(contraction)
         self.drive_mode = drive
