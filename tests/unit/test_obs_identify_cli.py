@@ -30,6 +30,21 @@ def test_bad_arguments(tmp_path, capsys):
         main(["--sample-rate", "12000", "--model-set", "t"])  # --source missing
 
 
+def test_one_sample_rate_per_set(tmp_path, capsys):
+    """Recordings that store different rates (npz here) cannot make one set."""
+    rng = np.random.default_rng(0)
+    for name, fs in (("a.npz", 48000.0), ("b.npz", 24000.0)):
+        n = int(0.3 * fs)
+        u = (np.arange(n) % int(fs / 107.5) == 0).astype(float)
+        ring = np.exp(-np.arange(200) / 20.0) * np.sin(np.arange(200) * 0.8)
+        np.savez(tmp_path / name, accel=np.convolve(u, ring)[:n] + 0.01 * rng.standard_normal(n),
+                 sample_rate=fs, rpm=1800.0)
+    rc = main(["--source", f"outer_race={tmp_path / 'a.npz'}", "--source", f"inner_race={tmp_path / 'b.npz'}",
+               "--orders", "4", "4", "0", "--model-set", "mixed", "--out", str(tmp_path)])
+    assert rc == 1
+    assert "a model set runs at one sample rate: " in capsys.readouterr().err
+
+
 def test_identifies_cwru_set_with_provenance(tmp_path, capsys, cwru_record):
     outer, inner = cwru_record("130_OR007at6_0hp_DE12k.mat"), cwru_record("105_IR007_0hp_DE12k.mat")
     rc = main(["--source", f"outer_race={outer}",

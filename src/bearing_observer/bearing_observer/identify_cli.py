@@ -165,11 +165,16 @@ def main(argv=None) -> int:
         return 2
     command = "bearing-identify " + " ".join(shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:]))
     out_dir = Path(args.out) / args.model_set
+    set_rate = None
     for fault, src in pairs:
         t0 = time.perf_counter()
         try:
             y, fs, rpm, used_bearing, prov = (_simulated(fault, args, bearing) if src == "sim"
                                               else _recorded(src, args, bearing))
+            if set_rate not in (None, fs):
+                raise ValueError(f"a model set runs at one sample rate: {src} is at {fs:g} Hz, the set at "
+                                 f"{set_rate:g} Hz (resample one recording, or identify two sets)")
+            set_rate = fs
             prov["command"] = command
             base = dict(sample_rate=fs, rpm=rpm, bearing=used_bearing, mode=args.mode,
                         n_average=args.n_average, refine_frequency=(src != "sim"))

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bearing_common import topics
 from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import FaultState
 
@@ -74,7 +75,7 @@ class ObserverSession:
     """
 
     def __init__(self, fault: FaultState, bearing: Bearing | str, model_set: str = "", rpm: float = 1800.0,
-                 speed_tolerance: float = 1e-3, stream_name: str = "vibration", log=_quiet,
+                 speed_tolerance: float = 1e-3, stream_name: str = topics.VIBRATION.name, log=_quiet,
                  log_period: float = 5.0):
         self.fault = FaultState(fault)
         self.bearing = load_bearing(bearing)
