@@ -25,6 +25,11 @@ Observer gain (pole choice, :func:`.realization.observer_gain`): ``"model"`` (de
 ``"contracted"`` (the model poles scaled towards the origin) or an array of poles. Every
 construction checks that all eigenvalues of ``A - L C`` lie strictly inside the unit circle.
 
+Fault frequency: :func:`fault_order` × shaft frequency; the order is the model's (measured
+on its identification record, slip included) when the observer watches the bearing the
+model was identified for, else the watched bearing's kinematic order (eqs. 2.53-2.54) with a
+:class:`BearingMismatchWarning`.
+
 Online phase and amplitude of the train (the thesis assumes them known). Every
 ``update_interval`` seconds, at fixed sample counts (so results do not depend on how the
 stream is chunked), the observer looks at the last ``window`` seconds of
@@ -46,6 +51,8 @@ stream is chunked), the observer looks at the last ``window`` seconds of
    explains little, and the drive is mostly off there (the phase still locks, see tests).
 
 The estimates apply from the next update boundary on (causal, one update of delay).
+``drive="phase"`` stops after step 1: the train is published at the estimated phase and
+nothing is subtracted (residual = y); model set ``none`` runs that way.
 """
 
 from __future__ import annotations
