@@ -20,8 +20,8 @@ import time
 
 import numpy as np
 
-from bearing_observer.hw_model import load_model_set
 from bearing_observer.impulse_trains import impulse_train
+from bearing_observer.model_sets import load_model_set
 from bearing_observer.observer import FaultObserver
 
 
@@ -80,12 +80,12 @@ def _relabel(model, sample_rate: float):
 
 def identification_time(seconds: float = 0.5) -> float:
     """Wall time (s) of :func:`identify_fault_model` on a synthetic 48 kHz OR record."""
-    from bearing_observer.identification import identify_fault_model
+    from bearing_observer.fault_identification import identify_fault_model
 
     model = load_model_set("sim_48k", 48000.0)["outer_race"]
     y = _signal(model, seconds, seed=1)
     t0 = time.perf_counter()
-    identify_fault_model(y, 48000.0, model.rpm, "outer_race", refine_frequency=False)
+    identify_fault_model(y, 48000.0, model.rpm, "outer_race", model.bearing, refine_frequency=False)
     return time.perf_counter() - t0
 
 

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bearing_observer.hw_model import load_model_set
 from bearing_observer.impulse_trains import impulse_train
+from bearing_observer.model_sets import load_model_set
 from bearing_observer.observer import FaultObserver
 
 

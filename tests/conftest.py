@@ -40,3 +40,10 @@ def mfpt_record():
 def hit_record():
     """Path of a HIT-SM SpectraQuest record by file name; skips with the reason when it is absent."""
     return _finder("hit-sm/spectraquest")
+
+
+@pytest.fixture
+def shared_recording():
+    """Path of a recording under the data directory by rig (cwru, mfpt, hit-sm/...) and file name;
+    skips with the reason when it is absent."""
+    return lambda rig, name: _finder(rig)(name)

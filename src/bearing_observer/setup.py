@@ -15,7 +15,8 @@ setup(
     zip_safe=False,
     maintainer="bearing-monitor maintainers",
     maintainer_email="maintainers@bearing-monitor.invalid",
-    description="Hammerstein-Wiener identification (thesis 2.4, app. B-C) and outer-/inner-race fault observers (thesis 3.1, app. D-E); observer node and bearing-identify CLI.",
+    description=("Hammerstein-Wiener identification (thesis 2.4, app. B-C) and outer-/inner-race fault observers "
+                 "(thesis 3.1, app. D-E); observer node and bearing-identify CLI."),
     license="Apache-2.0",
     entry_points={
         "console_scripts": [

@@ -1,13 +1,18 @@
-"""The observer node through real DDS: residuals match the offline observer; bad chunks are rejected."""
+"""The observer node through real DDS: residuals match the offline observer, bad chunks are rejected,
+parameters are set as ``ros2 param set`` does."""
 
 import math
 
 import numpy as np
 import pytest
+from rcl_interfaces.srv import SetParameters
+from rclpy.parameter import Parameter
 
 from bearing_common import topics
+from bearing_common.bearings import CATALOG
 from bearing_common.states import parse_fault
 from bearing_msgs.msg import VibrationChunk
+from bearing_observer.model_sets import load_model_set
 from bearing_observer.observer import FaultObserver
 
 pytestmark = pytest.mark.ros
@@ -45,17 +50,18 @@ def test_residuals_match_offline_observer_and_bad_chunks_are_rejected(ros_graph,
     for i, c in enumerate(chunks):
         if i == 5:  # a NaN sample
             pub.publish(chunk_msg(i, np.where(np.arange(N) == 7, np.nan, c)))
-        elif i == 9:  # a sample rate no model set has
+        elif i == 9:  # a sample rate no model set has: no model, the measurement passes through
             pub.publish(chunk_msg(i, c, fs=12345.0))
         else:
             pub.publish(chunk_msg(i, c))
-    ros_graph.wait_until(lambda: len(received) >= 18, 30.0, "18 residual chunks")
+    ros_graph.wait_until(lambda: len(received) >= 19, 30.0, "19 residual chunks")
     assert node_name in ros_graph.node.get_node_names()  # default node name follows fault_type
     indices = [m.first_sample_index // N for m in received]
-    assert indices == [i for i in range(20) if i not in (5, 9)]
+    assert indices == [i for i in range(20) if i != 5]
+    assert [m.model_set for m in received] == ["none" if i == 9 else "sim_48k" for i in indices]
     for m in received:
         assert m.fault_hypothesis == (1 if fault_type == "outer_race" else 2)
-        assert m.model_set and m.sample_rate == FS
+        assert m.sample_rate == (12345.0 if m.model_set == "none" else FS)
         assert len(m.residual) == len(m.estimate) == len(m.impulse_train) == N
         assert all(math.isfinite(v) for v in m.residual)
         np.testing.assert_allclose(np.asarray(m.residual) + np.asarray(m.estimate),
@@ -67,4 +73,41 @@ def test_residuals_match_offline_observer_and_bad_chunks_are_rejected(ros_graph,
     np.testing.assert_allclose(live, out.residual, rtol=1e-9, atol=1e-9)
     log = "\n".join(node.lines)
     assert "non-finite samples: 1 NaN/inf of 480" in log
-    assert "cannot observe 12345 Hz" in log
+    assert "model set none at 12345 Hz" in log
+
+
+def set_parameters(ros_graph, node_name, **values):
+    """``ros2 param set``: one SetParameters request to ``/<node_name>/set_parameters``; the results."""
+    client = ros_graph.node.create_client(SetParameters, f"/{node_name}/set_parameters")
+    ros_graph.wait_until(lambda: client.service_is_ready(), 30.0, f"/{node_name}/set_parameters")
+    request = SetParameters.Request(parameters=[Parameter(k, value=v).to_parameter_msg() for k, v in values.items()])
+    future = client.call_async(request)
+    ros_graph.wait_until(future.done, 10.0, "the set_parameters response")
+    return future.result().results
+
+
+def test_parameters_set_live_through_the_parameter_service(ros_graph):
+    """Read-only fault_type refused with rclpy's reason, an unknown bearing refused with ours, and
+    a valid bearing applied: the following residuals carry the new bearing's BPFO (no simulator
+    set for a 6203: model set none)."""
+    received = ros_graph.subscribe(topics.RESIDUAL_OUTER_RACE)
+    pub = ros_graph.publisher(topics.VIBRATION)
+    ros_graph.start("bearing_observer", "observer", params={"fault_type": "outer_race"})
+    ros_graph.wait_until(lambda: pub.get_subscription_count() > 0, 30.0, "the observer to subscribe")
+    [result] = set_parameters(ros_graph, "or_observer", fault_type="inner_race")
+    assert not result.successful and result.reason == "Trying to set a read-only parameter: fault_type."
+    [result] = set_parameters(ros_graph, "or_observer", bearing="nope")
+    assert not result.successful and result.reason.startswith("bearing: unknown bearing 'nope': give a catalog name")
+    y = synthetic_vibration(10)
+    for i in range(5):
+        pub.publish(chunk_msg(i, y[i * N:(i + 1) * N]))
+    ros_graph.wait_until(lambda: len(received) >= 5, 30.0, "5 residual chunks")
+    [result] = set_parameters(ros_graph, "or_observer", bearing="6203")
+    assert result.successful, result.reason
+    for i in range(5, 10):
+        pub.publish(chunk_msg(i, y[i * N:(i + 1) * N]))
+    ros_graph.wait_until(lambda: len(received) >= 10, 30.0, "10 residual chunks")
+    sim_bpfo = load_model_set("sim_48k")["outer_race"].fault_order * 30.0
+    assert [m.model_set for m in received] == ["sim_48k"] * 5 + ["none"] * 5
+    assert [m.fault_frequency for m in received] == pytest.approx(
+        [sim_bpfo] * 5 + [CATALOG["6203"].frequencies(1800.0).bpfo] * 5, rel=1e-12)

@@ -6,15 +6,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from bearing_common.bearings import CATALOG
 from bearing_observer import hw_model
-from bearing_observer.hw_model import (
-    HWModel,
-    ModelFileError,
-    available_model_sets,
-    default_model_set,
-    load,
-    load_model_set,
-)
+from bearing_observer.hw_model import HWModel, ModelFileError, load
 from bearing_observer.piecewise_linear import MonotonePiecewiseLinear
 
 
@@ -23,7 +17,7 @@ def _model(fs=48000.0, fault="outer_race"):
                    fault_order=107.5 / 30.0, b=[1.0, 0.5], f=[1.0, -1.6, 0.8], nk=1,
                    input_nonlinearity=MonotonePiecewiseLinear.gain(1.0),
                    output_nonlinearity=MonotonePiecewiseLinear([-1, 0, 2], [-2, 0, 1]),
-                   fit={"identification": 90.0}, provenance={"source": "test"})
+                   provenance={"source": "test"})
 
 
 def test_save_load_roundtrip(tmp_path):
@@ -37,6 +31,16 @@ def test_save_load_roundtrip(tmp_path):
     u[3] = 1.0
     assert_allclose(m2.simulate(u), m.simulate(u), rtol=0, atol=1e-15)
     assert m2.nk == 1 and m2.nb == 2 and m2.nf == 2
+
+
+def test_bearing_recorded_in_provenance(tmp_path):
+    m = _model()
+    assert m.bearing is None
+    m.provenance["bearing"] = CATALOG["6203"].to_dict()
+    assert load(m.save(tmp_path / "m.json")).bearing == CATALOG["6203"]
+    m.provenance["bearing"] = {"rolling_elements": 9}
+    with pytest.raises(ModelFileError, match="corrupt.*element_diameter"):
+        load(m.save(tmp_path / "m.json"))
 
 
 def test_missing_file(tmp_path):
@@ -80,28 +84,3 @@ def test_unstable_linear_block_rejected():
                 fault_order=1.0, b=[1.0], f=[1.0, -1.5], nk=0,
                 input_nonlinearity=MonotonePiecewiseLinear.gain(1.0),
                 output_nonlinearity=MonotonePiecewiseLinear.identity())
-
-
-def test_shipped_model_sets_load_and_match_rate():
-    sets = available_model_sets()
-    for name, fs in (("sim_48k", 48000.0), ("sim_12k", 12000.0), ("cwru_de_6205", 12000.0)):
-        assert name in sets
-        models = load_model_set(name, sample_rate=fs)
-        for ft, m in models.items():
-            assert m.fault_type == ft
-            assert m.provenance.get("command", "").startswith("bearing-identify")
-            assert "date" in m.provenance
-            for key in ("identification", "held_back", "time_series"):
-                assert key in m.fit
-    with pytest.raises(ModelFileError, match="12000 Hz"):
-        load_model_set("sim_48k", sample_rate=12000.0)
-    with pytest.raises(ModelFileError, match="unknown model set"):
-        load_model_set("no_such_set")
-
-
-def test_default_model_set():
-    assert default_model_set("simulator", 48000) == "sim_48k"
-    assert default_model_set("simulator", 12000) == "sim_12k"
-    assert default_model_set("cwru", 12000) == "cwru_de_6205"
-    with pytest.raises(ModelFileError, match="no model set"):
-        default_model_set("cwru", 48000)

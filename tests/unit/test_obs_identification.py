@@ -6,17 +6,10 @@ from numpy.testing import assert_allclose
 from scipy import signal
 
 from bearing_common.states import FaultState
-from bearing_observer.identification import (
-    estimate_fault_phase,
-    fit_percent,
-    hw_fit,
-    identify_fault_model,
-    oe_fit,
-    poly_to_reflection,
-    reflection_to_poly,
-)
+from bearing_observer.fault_identification import estimate_fault_phase, identify_fault_model
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
 from bearing_observer.piecewise_linear import MonotonePiecewiseLinear
+from bearing_observer.system_identification import fit_percent, hw_fit, oe_fit, poly_to_reflection, reflection_to_poly
 from bearing_recordings.mat_files import load_mat
 from bearing_sim.simulator import SimulationConfig, simulate
 
@@ -99,17 +92,17 @@ def sim_data():
 
 @pytest.mark.parametrize("fault", ["outer_race", "inner_race"])
 def test_simulator_models_fit_at_least_70_percent(sim_data, fault):
-    r = identify_fault_model(sim_data[fault], FS, 1800.0, fault, refine_frequency=False)
+    r = identify_fault_model(sim_data[fault], FS, 1800.0, fault, "6205", refine_frequency=False)
     fit = r.model.fit
-    assert fit["identification"] >= 70.0
-    assert fit["held_back"] >= 70.0, fit
-    assert fit["time_series"] >= 70.0, fit
-    assert fit["held_back_samples"] > 0.3 * sim_data[fault].size
+    assert fit.identification >= 70.0
+    assert fit.held_back >= 70.0, fit
+    assert fit.time_series >= 70.0, fit
+    assert fit.held_back_samples > 0.3 * sim_data[fault].size
     if fault == "inner_race":
         # the shaft-angle modulation explains the per-impact amplitudes; the plain average
         # of appendix B keeps almost nothing of them (sign follows the shaft angle)
-        assert r.info["modulation_r2"] > 0.9
-        assert r.info["plain_average_energy_ratio"] < 0.05
+        assert r.preprocessing.modulation_r2 > 0.9
+        assert r.preprocessing.plain_average_energy_ratio < 0.05
 
 
 # --- CWRU ---------------------------------------------------------------------------------
@@ -117,8 +110,8 @@ def test_cwru_outer_race_identification(cwru_record):
     rec = load_mat(cwru_record("130_OR007at6_0hp_DE12k.mat"), 12000.0)
     y, rpm = rec.accel, rec.rpm
     assert rec.channel == "X130_DE_time" and rpm == 1796.0
-    r = identify_fault_model(y[:12000], 12000.0, rpm, "outer_race")
+    r = identify_fault_model(y[:12000], 12000.0, rpm, "outer_race", "6205")
     # slip: measured BPFO within 1 % above/below the kinematic value, and not equal to it
-    assert abs(r.info["fault_frequency"] / r.info["kinematic_frequency"] - 1) < 0.01
-    assert r.model.fit["identification"] >= 70.0
-    assert np.isfinite(r.model.fit["time_series"])
+    assert abs(r.preprocessing.fault_frequency / r.preprocessing.kinematic_frequency - 1) < 0.01
+    assert r.model.fit.identification >= 70.0
+    assert np.isfinite(r.model.fit.time_series)

@@ -57,7 +57,7 @@ def test_warm_up_compiles_every_signature_the_observers_use():
     compile nothing more (a compile stalls the node for about a second, longer than its
     input queue holds)."""
     from bearing_observer import kernels
-    from bearing_observer.hw_model import load_model_set
+    from bearing_observer.model_sets import load_model_set
     from bearing_observer.observer import FaultObserver
 
     kernels.warm_up()

@@ -5,10 +5,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from bearing_common.states import FaultState
-from bearing_observer.hw_model import load_model_set
-from bearing_observer.identification import identify_fault_model
+from bearing_observer.fault_identification import identify_fault_model
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
-from bearing_observer.observer import FaultObserver, ModalFilter, balanced_realization
+from bearing_observer.model_sets import load_model_set
+from bearing_observer.observer import FaultObserver
+from bearing_observer.realization import ModalFilter, balanced_realization
 from bearing_recordings.mat_files import load_mat
 from bearing_sim.simulator import SimulationConfig, simulate
 
@@ -186,11 +187,11 @@ def test_or_and_ir_observers_discriminate_on_simulator(sim48, sim_data):
 @pytest.mark.parametrize("fault", ["outer_race", "inner_race"])
 def test_phase_recovered_on_simulator(sim48, sim_data, fault):
     y = sim_data[fault]
-    ident = identify_fault_model(y, FS, 1800.0, fault, refine_frequency=False)
+    ident = identify_fault_model(y, FS, 1800.0, fault, "6205", refine_frequency=False)
     obs = FaultObserver(sim48[fault])
     obs.process(y)
     # obs.phase refers to the next sample; advance the identified phase to the same time
-    expect = ident.info["phase_refined"] + TWO_PI * obs.fault_frequency * y.size / FS
+    expect = ident.preprocessing.phase_refined + TWO_PI * obs.fault_frequency * y.size / FS
     err = np.angle(np.exp(1j * (obs.phase - expect)))
     assert abs(err) / TWO_PI * FS / obs.fault_frequency < 1.0  # samples
 

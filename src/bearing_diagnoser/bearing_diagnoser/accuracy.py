@@ -113,7 +113,7 @@ def evaluate(record: LabelledRecording, method: str = "model", speed_told: bool 
         config = None
         if variant is not None:
             from bearing_common.bearings import load_bearing
-            config = variant(config_for(choose_model_set(rec, load_bearing(record.bearing))))
+            config = variant(config_for(choose_model_set(rec, load_bearing(record.bearing)).name))
         res = diagnose_recording(rec, method=method, rpm=rec.rpm, bearing=record.bearing, config=config)
     except InputError as exc:
         return RecordResult(record, method, None, 0.0, 0.0, None, 0, 0, 0, 0, 0, error=str(exc))

@@ -25,9 +25,10 @@ import numpy as np
 
 from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import FaultState
+from bearing_observer.model_sets import NONE
 
 from .calibration import calibrate
-from .decision_config import NO_MODEL, DiagnoserConfig, config_for
+from .decision_config import DiagnoserConfig, config_for
 from .fold_scores import FoldScorer
 from .periodicity import XCORR_LAG_S, EnergyEnvelope, train_correlation
 from .spectral_engine import SpectralEngine, WindowEvidence
@@ -154,7 +155,8 @@ class Diagnoser:
             band = self.config.fold.band if self.config.method == "fold" else None
             st = self._streams[h] = StreamBlocks(EnergyEnvelope(self._sample_rate, band))
         st.fault_hz = float(fault_frequency)
-        st.has_model = st.has_model or (estimate is not None and self.model_set != NO_MODEL)
+        st.has_model = st.has_model or (estimate is not None and self.model_set != NONE)
+        st.has_train = st.has_train or (impulse_train is not None and np.any(u != 0.0))
         y = r + e
         st.push(int(first_sample_index), y, r, u)
         if self.config.method == "spectral":
@@ -220,12 +222,14 @@ class Diagnoser:
         for h, st in self._streams.items():
             d = st.env.decimation
             win = st.window(-(-start // d), end // d)
-            if not st.has_model or win is None or not np.all(np.isfinite(win["y"])):
+            if win is None or not np.all(np.isfinite(win["y"])):
                 continue
             n = win["y"].size * d
             var_y = win["y2"].sum() - win["y"].sum() ** 2 / n
-            out[f"{h.label}_explained"] = float(1.0 - win["r2"].sum() / var_y) if var_y > 0 else 0.0
-            out[f"{h.label}_xcorr"] = train_correlation(win["ar"], win["u"], XCORR_LAG_S * st.env.envelope_rate)
+            if st.has_model:
+                out[f"{h.label}_explained"] = float(1.0 - win["r2"].sum() / var_y) if var_y > 0 else 0.0
+            if st.has_train:
+                out[f"{h.label}_xcorr"] = train_correlation(win["ar"], win["u"], XCORR_LAG_S * st.env.envelope_rate)
         return out
 
     # -- fold front end ----------------------------------------------------------------

@@ -23,9 +23,6 @@ from .spectral_engine import BASELINE, SpectralSettings
 
 METHODS = ("spectral", "fold")
 
-#: The model set of observers that pass the measurement through (no identified model).
-NO_MODEL = "none"
-
 
 @dataclass(frozen=True)
 class DiagnoserConfig:

@@ -21,11 +21,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bearing_common.bearings import Bearing, fault_frequency, load_bearing
+from bearing_observer.hw_model import ModelFileError
+from bearing_observer.model_sets import ModelSet, model_set
+from bearing_observer.model_sets import choose_model_set as registry_choice
 from bearing_recordings.recording import InputError, Recording
 from bearing_recordings.resampling import resample
 
 from .decision import STREAMS, Diagnoser
-from .decision_config import NO_MODEL, DiagnoserConfig, config_for, envelope_baseline
+from .decision_config import DiagnoserConfig, config_for, envelope_baseline
 from .segments import Segment, is_sensor_problem, segments_from_decisions
 from .spectral_engine import check_resolvable
 from .state_tracker import Decision
@@ -35,29 +38,21 @@ LOG = logging.getLogger(__name__)
 #: Chunk length (s) fed to the observers, as the simulator node publishes (0.01 s).
 CHUNK_S = 0.01
 
-#: Model sets the offline run knows: name -> (source it was identified on, sample rate Hz, bearing).
-MODEL_SETS = {"sim_48k": ("simulator", 48000.0, "6205"), "sim_12k": ("simulator", 12000.0, "6205"),
-              "cwru_de_6205": ("cwru", 12000.0, "6205"), NO_MODEL: ("", 0.0, "")}
-
 METHODS = ("model", "envelope")
 
 
-def choose_model_set(rec: Recording, bearing: Bearing, requested: str | None = None) -> str:
-    """The model set for ``rec``: ``requested`` if given, else by source, rate and bearing.
-
-    Simulator output → ``sim_48k`` (``sim_12k`` at or below 12 kHz); CWRU drive-end 6205
-    recordings → ``cwru_de_6205``; anything else (another rig, another bearing, a user's
-    sensor) → ``none``: no identified model, the measurement is decided on directly.
+def choose_model_set(rec: Recording, bearing: Bearing, requested: str | None = None) -> ModelSet:
+    """The model set for ``rec``: ``requested`` if given, else the registry's rule for its source,
+    rate and bearing with resampling allowed (:func:`bearing_observer.model_sets.choose_model_set`):
+    simulator output → ``sim_48k`` / ``sim_12k``, CWRU drive-end 6205 → ``cwru_de_6205``,
+    anything else (another rig, another bearing, a user's sensor) → ``none``.
     """
     if requested:
-        if requested not in MODEL_SETS:
-            raise InputError(f"unknown model set {requested!r}; known: {', '.join(MODEL_SETS)}")
-        return requested
-    if rec.source == "simulator":
-        return "sim_12k" if rec.sample_rate <= 12000.0 else "sim_48k"
-    if rec.source == "cwru" and bearing == load_bearing("6205"):
-        return "cwru_de_6205"
-    return NO_MODEL
+        try:
+            return model_set(requested)
+        except ModelFileError as exc:
+            raise InputError(str(exc)) from None
+    return registry_choice(rec.source, rec.sample_rate, bearing, resample=True)
 
 
 @dataclass
@@ -83,7 +78,7 @@ def _observers(model_set: str, rpm: float, fs: float, bearing: Bearing):
     except ImportError as exc:
         raise InputError(f"the observer core (bearing_observer.observer) is not available ({exc}); "
                          "use --method envelope or --model-set none") from None
-    return {h: FaultObserver.from_model_set(model_set, h.label, rpm, fs) for h in STREAMS}
+    return {h: FaultObserver.from_model_set(model_set, h.label, rpm, fs, bearing=bearing) for h in STREAMS}
 
 
 def _speed(rec: Recording, rpm: float | None) -> float | None:
@@ -124,9 +119,10 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; expected {' or '.join(METHODS)}")
     bearing = load_bearing(bearing or rec.bearing or None)
-    ms = choose_model_set(rec, bearing, model_set)
+    chosen = choose_model_set(rec, bearing, model_set)
+    ms = chosen.name
     LOG.info("model set %s%s; bearing %s", ms, "" if model_set else " (chosen from the input)", bearing.name)
-    fs = MODEL_SETS[ms][1] or rec.sample_rate
+    fs = chosen.sample_rate or rec.sample_rate
     cfg = config or config_for(ms)
     if method == "envelope":
         cfg = envelope_baseline(cfg)
@@ -145,7 +141,7 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     dg = Diagnoser(cfg, ms, bearing, fs)
     dg.tell_speed(speed)
     nominal = speed or cfg.fold.nominal_rpm
-    observed = method == "model" and ms != NO_MODEL
+    observed = method == "model"
     feeds = STREAMS if observed or cfg.method == "fold" else STREAMS[:1]  # one measurement suffices
     fault_hz = {h: fault_frequency(bearing, h, nominal) for h in STREAMS}
     obs = _observers(ms, nominal, fs, bearing) if observed else {}

@@ -23,7 +23,9 @@ class StreamBlocks:
     fault_hz : float or None
         The fault frequency the stream's observer last reported (Hz).
     has_model : bool
-        Whether the stream carries an observer estimate (y = r + ŷ with ŷ ≠ 0 possible).
+        Whether the stream carries an identified model's estimate (not model set ``none``).
+    has_train : bool
+        Whether the stream has carried an impulse train (u ≠ 0).
     """
 
     def __init__(self, envelope: EnergyEnvelope):
@@ -34,6 +36,7 @@ class StreamBlocks:
         self._arrays: dict[str, np.ndarray] = {k: np.zeros(0) for k in envelope.keys}
         self.fault_hz: float | None = None
         self.has_model = False
+        self.has_train = False
 
     @property
     def n_blocks(self) -> int:

@@ -20,22 +20,29 @@ Model file format (JSON, ``format_version`` 1), one fault type per file::
       "output_nonlinearity": {"x": [...], "y": [...]},  # g, model units -> m/s²
       "units": {...},
       "fit": {"identification": %, "held_back": %, "time_series": %, ...},
-      "provenance": {"source": ..., "command": ..., "date": ISO 8601 UTC, ...}
+      "provenance": {"source": ..., "command": ..., "date": ISO 8601 UTC,
+                     "bearing": {...}, ...}   # the bearing identified for (bearing_common YAML form, SI)
     }
 
-A *model set* is a directory ``models/<set_name>/`` holding ``outer_race.json`` and
-``inner_race.json`` identified from the same source at the same sample rate.
+``fault_order`` was measured on the identification record of a machine with
+``provenance.bearing``; an observer of another bearing uses that bearing's kinematic order
+instead (:func:`bearing_observer.observer.fault_order`).
+
+A *model set* is a directory holding ``outer_race.json`` and ``inner_race.json`` identified
+on one machine at one sample rate; :mod:`.model_sets` keeps the registry.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 from scipy import signal
+
+from bearing_common.bearings import Bearing, bearing_from_dict
 
 from .piecewise_linear import MonotonePiecewiseLinear
 
@@ -44,16 +51,49 @@ KIND = "bearing_observer.hw_model"
 FAULT_TYPES = ("outer_race", "inner_race")
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 
-#: Model set per (data source, sample rate in Hz).
-DEFAULT_SETS = {
-    ("simulator", 48000.0): "sim_48k",
-    ("simulator", 12000.0): "sim_12k",
-    ("cwru", 12000.0): "cwru_de_6205",
-}
-
-
 class ModelFileError(ValueError):
     """A model file is missing, corrupt or does not match what the caller needs."""
+
+
+@dataclass
+class ModelFit:
+    """How well one model fits its record (%, MATLAB ``compare``: ``100 (1 - |y - yhat| / |y - mean(y)|)``).
+
+    Attributes
+    ----------
+    identification : float
+        On the identification data.
+    identification_linear_only : float
+        The same with the output nonlinearity replaced by the identity (OE initialisation).
+    held_back : float or None
+        On the rest of the record (None when nothing is held back).
+    held_back_periods_median : float or None
+        Median over the held-back fault periods.
+    time_series : float
+        On the whole record, driven by a strictly periodic train.
+    time_series_ls_amplitude : (float, float)
+        ``(fit %, gain)`` of the time series with the single least-squares amplitude.
+    identification_samples, held_back_samples : int
+    series_seconds : float
+        Length of the record (s).
+    """
+
+    identification: float
+    identification_linear_only: float
+    held_back: float | None
+    held_back_periods_median: float | None
+    time_series: float
+    time_series_ls_amplitude: tuple[float, float]
+    identification_samples: int
+    held_back_samples: int
+    series_seconds: float
+
+    @classmethod
+    def from_dict(cls, d: dict) -> ModelFit:
+        unknown = set(d) - {f.name for f in fields(cls)}
+        if unknown:
+            raise ValueError(f"fit: unknown keys {', '.join(sorted(unknown))}")
+        return cls(**{**d, "time_series_ls_amplitude": tuple(d["time_series_ls_amplitude"])})
 
 
 @dataclass
@@ -83,8 +123,8 @@ class HWModel:
         Offset ``c`` of eq. 2.58 (inner race); unused for the outer race (eq. 2.55).
     pulse_width : float
         Pulse width of the train (s).
-    fit : dict
-        Fit percentages (MATLAB ``compare`` definition) and related numbers.
+    fit : ModelFit or None
+        Fit figures on the identification record (None for a model not identified here).
     provenance : dict
         Data source, command, date.
     """
@@ -101,7 +141,7 @@ class HWModel:
     output_nonlinearity: MonotonePiecewiseLinear
     train_offset: float = 0.0
     pulse_width: float | None = None
-    fit: dict = field(default_factory=dict)
+    fit: ModelFit | None = None
     provenance: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -134,6 +174,12 @@ class HWModel:
     def modulated(self) -> bool:
         """True for the eq. 2.58 (shaft-modulated) train of the inner race."""
         return self.fault_type == "inner_race"
+
+    @property
+    def bearing(self) -> Bearing | None:
+        """The bearing the model was identified for (``provenance["bearing"]``), None if not recorded."""
+        d = self.provenance.get("bearing")
+        return None if d is None else bearing_from_dict(d, "model provenance bearing")
 
     @property
     def input_gain(self) -> float:
@@ -187,7 +233,7 @@ class HWModel:
                 "sample_rate": "Hz", "fault_frequency": "Hz", "rpm": "rev/min",
                 "pulse_width": "s", "fit": "percent, 100*(1-|y-yhat|/|y-mean(y)|)",
             },
-            "fit": _jsonable(self.fit),
+            "fit": _jsonable(asdict(self.fit)) if self.fit is not None else {},
             "provenance": _jsonable(self.provenance),
         }
 
@@ -205,7 +251,7 @@ class HWModel:
             output_nonlinearity=MonotonePiecewiseLinear.from_dict(d["output_nonlinearity"]),
             train_offset=float(d["train"].get("offset", 0.0)),
             pulse_width=float(d["train"]["pulse_width"]),
-            fit=dict(d.get("fit", {})), provenance=dict(d.get("provenance", {})),
+            fit=ModelFit.from_dict(d["fit"]) if d.get("fit") else None, provenance=dict(d.get("provenance", {})),
         )
 
     def save(self, path) -> Path:
@@ -214,6 +260,12 @@ class HWModel:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
         return path
+
+
+def same_bearing(a: Bearing, b: Bearing) -> bool:
+    """True when ``a`` and ``b`` have the same characteristic orders (eqs. 2.51-2.54), whatever their names."""
+    oa, ob = a.orders(), b.orders()
+    return all(math.isclose(getattr(oa, k), getattr(ob, k), rel_tol=1e-9) for k in ("ftf", "bsf", "bpfo", "bpfi"))
 
 
 def _jsonable(obj):
@@ -261,6 +313,7 @@ def load(path, sample_rate: float | None = None, fault_type: str | None = None) 
             f"(this code reads {FORMAT_VERSION})")
     try:
         model = HWModel.from_dict(d)
+        model.bearing  # noqa: B018 (validates the recorded bearing)
     except (KeyError, TypeError, ValueError) as exc:
         raise ModelFileError(f"model file {path} is corrupt: {type(exc).__name__}: {exc}") from None
     if sample_rate is not None and not math.isclose(model.sample_rate, float(sample_rate),
@@ -271,56 +324,3 @@ def load(path, sample_rate: float | None = None, fault_type: str | None = None) 
     if fault_type is not None and model.fault_type != fault_type:
         raise ModelFileError(f"{path} holds a {model.fault_type} model, not {fault_type}")
     return model
-
-
-def model_set_dir(name: str, root=None) -> Path:
-    """Directory of the model set ``name`` (under the package's ``models/`` by default)."""
-    if not name or "/" in name or name.startswith("."):
-        raise ModelFileError(f"invalid model set name {name!r}")
-    return Path(root) / name if root is not None else MODELS_DIR / name
-
-
-def available_model_sets(root=None) -> list[str]:
-    """Names of the model sets shipped (directories holding both fault models)."""
-    base = Path(root) if root is not None else MODELS_DIR
-    if not base.is_dir():
-        return []
-    return sorted(p.name for p in base.iterdir()
-                  if p.is_dir() and all((p / f"{ft}.json").is_file() for ft in FAULT_TYPES))
-
-
-def load_model_set(name: str, sample_rate: float | None = None, root=None) -> dict[str, HWModel]:
-    """Load ``models/<name>/{outer_race,inner_race}.json``.
-
-    Returns
-    -------
-    dict
-        ``{"outer_race": HWModel, "inner_race": HWModel}``.
-
-    Raises
-    ------
-    ModelFileError
-        Unknown set, missing/corrupt file, or sample-rate mismatch.
-    """
-    d = model_set_dir(name, root)
-    if not d.is_dir():
-        raise ModelFileError(
-            f"unknown model set {name!r} (no directory {d}); available: "
-            f"{', '.join(available_model_sets(root)) or 'none'}")
-    return {ft: load(d / f"{ft}.json", sample_rate=sample_rate, fault_type=ft) for ft in FAULT_TYPES}
-
-
-def default_model_set(source: str, sample_rate: float) -> str:
-    """Name of the model set for data from ``source`` (``simulator`` or ``cwru``) at ``sample_rate``.
-
-    Raises
-    ------
-    ModelFileError
-        No set for that source and rate.
-    """
-    key = (str(source).lower(), float(sample_rate))
-    if key not in DEFAULT_SETS:
-        known = ", ".join(f"{s} @ {r:g} Hz" for s, r in DEFAULT_SETS)
-        raise ModelFileError(
-            f"no model set for source {source!r} at {float(sample_rate):g} Hz; known: {known}")
-    return DEFAULT_SETS[key]

@@ -16,25 +16,19 @@ with ``(A, B, C, D)`` a balanced realization of ``B(q)/F(q)`` (the pure delay ``
 applied to ``w`` by a carried sample buffer, not kept in the state vector). Substituting,
 ``z_hat`` is the output of one LTI system with two inputs, ``w`` and ``z_tilde``, and state
 matrix ``A - L C``. With ``L = 0`` that system is ``B/F`` driven by ``w`` alone, run by
-``scipy.signal.lfilter``; otherwise it is run in modal form (:class:`ModalFilter`, a
-compiled loop). Both carry their state between calls, so chunked processing equals
+``scipy.signal.lfilter``; otherwise it is run in modal form (:class:`.realization.ModalFilter`,
+a compiled loop). Both carry their state between calls, so chunked processing equals
 one-shot processing, and no per-sample Python loop runs.
 
-Observer gain (pole choice). ``poles`` may be
+Observer gain (pole choice, :func:`.realization.observer_gain`): ``"model"`` (default,
+``L = 0``: the model's own poles; white measurement noise passes with gain 1),
+``"contracted"`` (the model poles scaled towards the origin) or an array of poles. Every
+construction checks that all eigenvalues of ``A - L C`` lie strictly inside the unit circle.
 
-* ``"model"`` (default): ``L = 0``; the error dynamics are the model's own (stable) poles.
-  The residual is then ``y - g(model response to the train)`` and white measurement noise
-  passes with gain 1 (the smallest possible here).
-* ``"contracted"``: the model poles scaled by ``contraction`` (default 0.95) towards the
-  origin, placed with python-control ``place`` (Tits-Yang robust pole placement, not
-  Ackermann).
-* an array of poles (discrete time, |p| < 1), placed the same way.
-
-The thesis' appendix D poles (near the origin, Ackermann) amplified white measurement noise
-43-96 times in the feasibility study (``shared/diagnosis-notes.md``); the project defaults to
-``L = 0`` and measures the noise gain of whatever is chosen (:attr:`FaultObserver.noise_gain`).
-Every construction checks that all eigenvalues of ``A - L C`` lie strictly inside the unit
-circle (ValueError otherwise).
+Fault frequency: :func:`fault_order` × shaft frequency; the order is the model's (measured
+on its identification record, slip included) when the observer watches the bearing the
+model was identified for, else the watched bearing's kinematic order (eqs. 2.53-2.54) with a
+:class:`BearingMismatchWarning`.
 
 Online phase and amplitude of the train (the thesis assumes them known). Every
 ``update_interval`` seconds, at fixed sample counts (so results do not depend on how the
@@ -57,26 +51,28 @@ stream is chunked), the observer looks at the last ``window`` seconds of
    explains little, and the drive is mostly off there (the phase still locks, see tests).
 
 The estimates apply from the next update boundary on (causal, one update of delay).
+``drive="phase"`` stops after step 1: the train is published at the estimated phase and
+nothing is subtracted (residual = y); model set ``none`` runs that way.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft as sp_fft
-from scipy import linalg, signal
+from scipy import signal
 
-from bearing_common.bearings import CATALOG
-from bearing_common.bearings import fault_frequency as kinematic_frequency
+from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.states import parse_fault
 
-DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
-from bearing_common.states import FaultState
-
-from .hw_model import HWModel, load_model_set
+from .hw_model import HWModel, same_bearing
 from .impulse_trains import TWO_PI, impulse_train, modulated_train_components
-from .kernels import fold_energy, run_modes
+from .kernels import fold_energy
+from .model_sets import NONE, load_model_set
+from .realization import ModalFilter, balanced_realization, observer_gain
 
 
 @dataclass
@@ -103,156 +99,26 @@ class ObserverOutput:
     drive: np.ndarray
 
 
-class ModalFilter:
-    """The observer's error dynamics as decoupled first-order modes (exact state).
+class BearingMismatchWarning(UserWarning):
+    """The observer watches another bearing than its model was identified for."""
 
-    ``x[n+1] = Ao x[n] + Bw w[n] + Bz z[n]``, ``out[n] = C x[n] + D w[n]`` with
-    ``Ao = V diag(lam) V^-1``: each mode ``xi_i[n+1] = lam_i xi_i[n] + v_i[n]`` (one complex
-    mode per conjugate pair) runs in the compiled :func:`~bearing_observer.kernels.run_modes`,
-    its state carried between calls. No transfer-function polynomials are formed (they are
-    badly conditioned for poles near z = 1).
+
+def fault_order(model: HWModel, bearing: Bearing | None) -> tuple[float, str]:
+    """Impacts per shaft revolution the observer uses, and a warning text ("" when none).
+
+    The model's own order (measured on its identification record, slip included) when
+    ``bearing`` is None or has the orders of the model's bearing; otherwise the kinematic
+    order of ``bearing`` (eqs. 2.53-2.54), with a warning: the model's dynamics were then
+    identified on a machine with another bearing (or on one whose bearing is not recorded).
     """
-
-    def __init__(self, Ao, Bw, Bz, C, D):
-        lam, V = linalg.eig(Ao)
-        if np.linalg.cond(V) > 1e10:
-            raise ValueError("observer poles give a nearly defective A - L C; choose distinct poles")
-        Vi = linalg.inv(V)
-        keep = lam.imag >= 0.0
-        self.lam = np.ascontiguousarray(lam[keep])
-        self.weight = np.where(self.lam.imag > 0.0, 2.0, 1.0)
-        self.bw = np.ascontiguousarray((Vi @ Bw)[keep, 0])
-        self.bz = np.ascontiguousarray((Vi @ Bz)[keep, 0])
-        self.c = np.ascontiguousarray((C @ V)[0, keep])
-        self.d = float(D[0, 0])
-        self.reset()
-
-    def reset(self):
-        self.state = np.zeros(self.lam.size, dtype=complex)
-
-    def run(self, w: np.ndarray, z: np.ndarray) -> np.ndarray:
-        out = np.empty(w.size)
-        run_modes(self.lam, self.bw, self.bz, self.c, self.weight, self.d,
-                  np.ascontiguousarray(w, dtype=float), np.ascontiguousarray(z, dtype=float),
-                  self.state, out)
-        return out
-
-
-def modal_realization(b, f):
-    """Real block-diagonal (modal) realization of ``B(q)/F(q)`` from its partial fractions.
-
-    Well conditioned for lightly damped poles near z = 1, unlike companion forms. Needs
-    distinct poles and ``len(b) <= len(f)``; raises ValueError otherwise.
-    """
-    b = np.asarray(b, dtype=float)
-    f = np.asarray(f, dtype=float)
-    if b.size > f.size:
-        raise ValueError("modal realization needs nb <= nf + 1")
-    r, p, k = signal.residuez(b, f)
-    d = float(np.real(np.sum(r))) + (float(np.real(k[0])) if len(k) else 0.0)
-    blocks, bs, cs = [], [], []
-    used = np.zeros(p.size, dtype=bool)
-    for i in range(p.size):
-        if used[i]:
-            continue
-        used[i] = True
-        if abs(p[i].imag) <= 1e-12 * max(1.0, abs(p[i])):
-            blocks.append(np.array([[p[i].real]]))
-            bs.append([1.0])
-            cs.append([float(np.real(r[i] * p[i]))])
-            continue
-        j = np.flatnonzero(~used & (np.abs(p - np.conj(p[i])) < 1e-8 * max(1.0, abs(p[i]))))
-        if j.size == 0:
-            raise ValueError("unpaired complex pole")
-        used[j[0]] = True
-        pi = p[i] if p[i].imag > 0 else np.conj(p[i])
-        ci = (r[i] if p[i].imag > 0 else r[j[0]]) * pi
-        blocks.append(np.array([[pi.real, -pi.imag], [pi.imag, pi.real]]))
-        bs.append([1.0, 0.0])
-        cs.append([2.0 * ci.real, -2.0 * ci.imag])
-    A = linalg.block_diag(*blocks)
-    B = np.concatenate(bs)[:, None]
-    C = np.concatenate(cs)[None, :]
-    return A, B, C, np.array([[d]])
-
-
-def balanced_realization(b, f):
-    """Balanced state-space realization ``(A, B, C, D)`` of ``B(q)/F(q)`` (q^-1 polynomials).
-
-    Square-root balancing (discrete gramians) of the modal realization; when balancing is
-    not possible (singular gramians), the modal realization itself is returned, and when
-    that is not possible either, ``scipy.signal.tf2ss``'s companion form.
-    """
-    try:
-        A, B, C, D = modal_realization(b, f)
-    except ValueError:
-        bb = np.asarray(b, dtype=float)
-        ff = np.asarray(f, dtype=float)
-        m = max(bb.size, ff.size)
-        A, B, C, D = signal.tf2ss(np.concatenate([bb, np.zeros(m - bb.size)]),
-                                  np.concatenate([ff, np.zeros(m - ff.size)]))
-        return A, B, C, D
-    if A.shape[0] == 0:
-        return A, B, C, D
-    try:
-        wc = linalg.solve_discrete_lyapunov(A, B @ B.T)
-        wo = linalg.solve_discrete_lyapunov(A.T, C.T @ C)
-        lc = linalg.cholesky((wc + wc.T) / 2, lower=True)
-        lo = linalg.cholesky((wo + wo.T) / 2, lower=True)
-        u, s, vt = linalg.svd(lo.T @ lc)
-        if s.min() <= 1e-12 * s.max():
-            raise linalg.LinAlgError("near non-minimal")
-        sh = 1.0 / np.sqrt(s)
-        T = lc @ vt.T * sh[None, :]
-        Ti = (sh[:, None] * u.T) @ lo.T
-        return Ti @ A @ T, Ti @ B, C @ T, D
-    except (linalg.LinAlgError, ValueError):
-        return A, B, C, D
-
-
-def observer_gain(A, C, poles="model", contraction: float = 0.95):
-    """Observer gain ``L`` (n×1) and the poles of ``A - L C``.
-
-    Parameters
-    ----------
-    A : ndarray (n, n); C : ndarray (1, n)
-    poles : "model" | "contracted" | array_like
-        See the module docstring.
-    contraction : float
-        Factor for ``"contracted"`` (0 < contraction < 1).
-
-    Raises
-    ------
-    ValueError
-        Unknown choice, or some eigenvalue of ``A - L C`` not strictly inside |z| < 1.
-    """
-    n = A.shape[0]
-    if isinstance(poles, str):
-        if poles == "model":
-            L = np.zeros((n, 1))
-        elif poles == "contracted":
-            if not 0.0 < contraction < 1.0:
-                raise ValueError("contraction must lie in (0, 1)")
-            L = _place(A, C, contraction * np.linalg.eigvals(A))
-        else:
-            raise ValueError(f"poles must be 'model', 'contracted' or an array, got {poles!r}")
-    else:
-        p = np.asarray(poles, dtype=complex).ravel()
-        if p.size != n:
-            raise ValueError(f"need {n} poles, got {p.size}")
-        L = _place(A, C, p)
-    eig = np.linalg.eigvals(A - L @ C)
-    if n and np.max(np.abs(eig)) >= 1.0 - 1e-9:
-        raise ValueError(f"observer unstable: max |eig(A - L C)| = {np.max(np.abs(eig)):.6f} >= 1")
-    return L, eig
-
-
-def _place(A, C, p):
-    import control  # python-control: place() is Tits-Yang robust pole placement
-
-    if np.any(np.abs(p) >= 1.0):
-        raise ValueError("requested observer poles must lie strictly inside the unit circle")
-    return np.asarray(control.place(A.T, C.T, p)).T
+    if bearing is None or (model.bearing is not None and same_bearing(bearing, model.bearing)):
+        return model.fault_order, ""
+    identified_for = model.bearing.name if model.bearing is not None else "an unrecorded bearing"
+    where = model.provenance.get("model_set", "this model")
+    return bearing.orders().of(parse_fault(model.fault_type)), (
+        f"{where} ({model.fault_type}) was identified for {identified_for}, not {bearing.name}: "
+        f"using {bearing.name}'s kinematic fault frequency with the other machine's dynamics "
+        "(identify a model set for this machine, or use model set 'none')")
 
 
 class FaultObserver:
@@ -266,6 +132,10 @@ class FaultObserver:
         Shaft speed (rev/min); default the model's.
     sample_rate : float, optional
         Hz; must equal the model's.
+    bearing : Bearing or str, optional
+        The watched bearing (anything :func:`bearing_common.bearings.load_bearing` reads);
+        default the model's. Its fault order is :func:`fault_order`'s: another bearing
+        than the model's gives a :class:`BearingMismatchWarning` and runs on.
     poles : "model" | "contracted" | array_like
         Observer pole choice (module docstring). Default ``"model"`` (L = 0).
     contraction : float
@@ -276,9 +146,10 @@ class FaultObserver:
         Seconds between estimate updates (at fixed sample counts).
     min_explained : float
         Minimum explained energy fraction for the train drive to be used.
-    drive : "adaptive" | "off" | "fixed"
-        ``adaptive``: online phase and amplitude; ``off``: no train input (u = 0);
-        ``fixed``: use ``phase`` and ``gains`` as given.
+    drive : "adaptive" | "phase" | "off" | "fixed"
+        ``adaptive``: online phase and amplitude; ``phase``: online phase, no train input
+        (u = 0: the train is published, not subtracted); ``off``: no train input, the
+        train at phase 0; ``fixed``: use ``phase`` and ``gains`` as given.
     phase : float, optional
         Fixed fault phase (rad) at the observer's time 0, for ``drive="fixed"``.
     gains : sequence of float, optional
@@ -288,17 +159,21 @@ class FaultObserver:
     """
 
     def __init__(self, model: HWModel, rpm: float | None = None, sample_rate: float | None = None,
-                 poles="model", contraction: float = 0.95, window: float = 0.1,
+                 bearing: Bearing | str | None = None, poles="model", contraction: float = 0.95, window: float = 0.1,
                  update_interval: float = 0.1, min_explained: float = 0.4,
                  drive: str = "adaptive", phase: float | None = None, gains=None):
         if sample_rate is not None and not math.isclose(sample_rate, model.sample_rate, rel_tol=1e-9):
             raise ValueError(f"model identified at {model.sample_rate:g} Hz, observer asked for "
                              f"{sample_rate:g} Hz: resample or pick a model set for that rate")
-        if drive not in ("adaptive", "off", "fixed"):
-            raise ValueError("drive must be 'adaptive', 'off' or 'fixed'")
+        if drive not in ("adaptive", "phase", "off", "fixed"):
+            raise ValueError("drive must be 'adaptive', 'phase', 'off' or 'fixed'")
         self.model = model
+        self.bearing = model.bearing if bearing is None else load_bearing(bearing)
+        self.fault_order, mismatch = fault_order(model, None if bearing is None else self.bearing)
+        if mismatch:
+            warnings.warn(mismatch, BearingMismatchWarning, stacklevel=2)
         self.sample_rate = float(model.sample_rate)
-        self.fault = FaultState.OUTER_RACE if model.fault_type == "outer_race" else FaultState.INNER_RACE
+        self.fault = parse_fault(model.fault_type)
         self.poles_choice = poles
         self._contraction = float(contraction)
         self.drive_mode = drive
@@ -316,9 +191,7 @@ class FaultObserver:
             # L = 0: z_hat = B/F w exactly; run the identified polynomials directly.
             self._modal = None
         self._tf_w = (model.b, model.f) if not np.any(self.L) else None
-        self._template_cache = {}
-        # unit-impulse response template of the linear block (for phase estimation)
-        self._template_len = None
+        self._template_cache = {}  # folded unit-impulse response energy (phase estimation)
         self._noise_gain = None
         self._fixed_phase = phase
         self._fixed_gains = None if gains is None else np.asarray(gains, dtype=float).ravel()
@@ -330,15 +203,24 @@ class FaultObserver:
     # ------------------------------------------------------------------------------------
     @classmethod
     def from_model_set(cls, set_name: str, fault_type: str, rpm: float | None = None,
-                       sample_rate: float | None = None, **kwargs) -> FaultObserver:
-        """Observer for ``fault_type`` from the shipped model set ``set_name``."""
-        models = load_model_set(set_name, sample_rate=sample_rate)
-        return cls(models[fault_type], rpm=rpm, sample_rate=sample_rate, **kwargs)
+                       sample_rate: float | None = None, bearing: Bearing | str | None = None,
+                       root=None, **kwargs) -> FaultObserver:
+        """Observer for ``fault_type`` from the model set ``set_name`` (:mod:`.model_sets`).
+
+        Set ``none`` (no model) needs ``rpm`` and ``sample_rate`` and runs with
+        ``drive="phase"``: residual = y, estimate = 0, the train's phase estimated online.
+        """
+        models = load_model_set(set_name, sample_rate=sample_rate, root=root, bearing=bearing)
+        if set_name == NONE:
+            if rpm is None:
+                raise ValueError(f"model set {NONE!r} states no shaft speed: give rpm")
+            kwargs.setdefault("drive", "phase")
+        return cls(models[fault_type], rpm=rpm, sample_rate=sample_rate, bearing=bearing, **kwargs)
 
     # ------------------------------------------------------------------------------------
     @property
     def fault_frequency(self) -> float:
-        """Current impact frequency (Hz): model fault order × shaft frequency."""
+        """Current impact frequency (Hz): :attr:`fault_order` × shaft frequency."""
         return self._freq
 
     @property
@@ -358,8 +240,7 @@ class FaultObserver:
         self.rpm = rpm
         self._cached_trains = None
         self._fr = rpm / 60.0
-        self._freq = self.model.fault_order * self._fr
-        self._kinematic = kinematic_frequency(DRIVE_END_6205, self.fault, rpm)
+        self._freq = self.fault_order * self._fr
 
     def reset(self) -> None:
         """Zero the observer state and forget the phase/amplitude estimates."""
@@ -425,7 +306,7 @@ class FaultObserver:
         Pulse positions are computed per sample from the speed anchor, so a slice equals
         the block rendered on its own (to rounding of the sub-sample position, ~1e-12) and
         does not depend on how the stream is chunked."""
-        plain_only = self.drive_mode == "off"
+        plain_only = self.drive_mode in ("phase", "off")
         self._cached_trains = (n_start, n_end) + self._trains(n_end - n_start, n_start, plain_only)
 
     def _block_trains(self, n: int):
@@ -482,6 +363,9 @@ class FaultObserver:
         den = cm - 2.0 * c0 + cp
         frac = 0.5 * (cm - cp) / den if den < 0 else 0.0
         self._phase_c = ((lag + min(max(float(frac), -0.5), 0.5)) / n_bins) % 1.0
+        if self.drive_mode == "phase":
+            self._cached_trains = None  # rendered again at the new phase
+            return
         # regressors over the window (zero state at the window start; first part discarded);
         # the trains are rendered through the next update interval in the same call
         self._cache_trains(self._n - z.size, self._n + self.update_n)
@@ -529,7 +413,7 @@ class FaultObserver:
         out_drive[sl] = u
         # bookkeeping: sample count and the estimation window
         self._n += n
-        if self.drive_mode == "adaptive":
+        if self.drive_mode in ("adaptive", "phase"):
             W = self.window_n
             self._win_z = np.concatenate([self._win_z, z_t])[-W:]
             if self._n % self.update_n == 0:

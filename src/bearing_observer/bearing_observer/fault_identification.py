@@ -1,9 +1,10 @@
-"""Hammerstein-Wiener identification of the fault models (thesis section 2.4, appendices B-C).
+"""Fault-model identification from a record of a known fault (thesis section 2.4, appendices B-C).
 
 Pipeline (:func:`identify_fault_model`):
 
-1. Fault frequency: the kinematic value (eqs. 2.53-2.54) refined on the data within
-   ±3 % (slip on real machines) by maximising the envelope spectrum's harmonics.
+1. Fault frequency: the kinematic value of the given bearing (eqs. 2.53-2.54) refined on
+   the data within ±3 % (slip on real machines) by maximising the envelope spectrum's
+   harmonics.
 2. Fault phase: the squared signal folded over the fault period; the impact time is the
    onset of the folded energy peak (the first bin before the peak below 10 % of it).
 3. Periods: the record is cut into fault periods starting a little before each impact.
@@ -19,317 +20,38 @@ Pipeline (:func:`identify_fault_model`):
      of appendix B keeps only the ``c`` part of the impacts (it cancels the part whose sign
      follows the shaft angle); its energy relative to the weighted average is reported as
      ``plain_average_energy_ratio``.
-4. Linear output-error fit ``x = q^-nk B/F u`` (Steiglitz-McBride iterations, then
-   simulation-error minimisation), the initialisation of
-5. HW estimation by minimising the simulation error ``y - g(q^-nk B/F f(u))`` with
-   ``scipy.optimize.least_squares``. F is parametrised by reflection coefficients
-   ``tanh(rho_i)``, so every iterate is stable.
+4. HW fit of the train to the identification data (:func:`.system_identification.hw_fit`).
 
 Identifiability (the project's decision, ``shared/model-notes.md``): an impulse train takes
 two values (0 and the pulse height), so a piecewise-linear input nonlinearity is not
 identifiable from it: only ``f(0)`` and ``f(1)`` matter. ``f`` is therefore a gain, fixed to
-1 (``f(u) = u``), the train's scale being carried by ``B``. The output nonlinearity ``g`` is
-strictly increasing piecewise linear with ``g(0) = 0`` and geometric-mean slope 1; this
-normalisation removes the scale ambiguity between ``B`` and ``g``.
-
-Fit is MATLAB ``compare``'s: ``100 (1 - |y - yhat| / |y - mean(y)|)`` (%).
+1 (``f(u) = u``), the train's scale being carried by ``B``.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy import optimize, signal
+from scipy import signal
 
-from bearing_common.bearings import CATALOG
-from bearing_common.bearings import fault_frequency as kinematic_frequency
-
-DRIVE_END_6205 = CATALOG["6205"]  # TODO(issue 11): bearing as input
+from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import FaultState, parse_fault
 
-from .hw_model import HWModel
+from .hw_model import HWModel, ModelFit
 from .impulse_trains import TWO_PI, impact_times, impulse_train
-from .piecewise_linear import MonotonePiecewiseLinear, evaluate_piecewise_linear
+from .piecewise_linear import MonotonePiecewiseLinear
+from .system_identification import N_BREAKPOINTS, fit_percent, hw_fit
 
 #: Default orders (nb, nf, nk) per fault type, chosen with the order search on the
 #: simulator at 48 kHz (see ``identify_cli --order-search``).
 DEFAULT_ORDERS = {"outer_race": (8, 8, 0), "inner_race": (8, 8, 0)}
 #: Number of periods averaged for the inner race (appendix B).
 N_AVERAGE_IR = 38
-#: Bound on the reflection-coefficient parameters: |k| <= tanh(4.5) = 0.99975, so the
-#: poles of B/F stay strictly inside the unit circle.
-RHO_MAX = 4.5
-#: Output-nonlinearity breakpoints.
-N_BREAKPOINTS = 7
 
 
-def fit_percent(y, yhat) -> float:
-    """MATLAB ``compare`` fit (%): ``100 (1 - |y - yhat| / |y - mean(y)|)``."""
-    y = np.asarray(y, dtype=float)
-    yhat = np.asarray(yhat, dtype=float)
-    dev = y - y.mean()
-    den = math.sqrt(float(np.sum(dev * dev)))  # (np.linalg.norm goes through BLAS dot)
-    if den == 0.0:
-        return float("nan")
-    err = y - yhat
-    return float(100.0 * (1.0 - math.sqrt(float(np.sum(err * err))) / den))
-
-
-# ---------------------------------------------------------------------------------------
-# Stable parametrisation of F (reflection coefficients)
-# ---------------------------------------------------------------------------------------
-def reflection_to_poly(rho: np.ndarray) -> np.ndarray:
-    """Monic F from unconstrained ``rho`` (reflection coefficients ``tanh(rho)``): stable."""
-    a = np.array([1.0])
-    for k in np.tanh(np.asarray(rho, dtype=float)):
-        a = np.concatenate([a, [0.0]]) + k * np.concatenate([[0.0], a[::-1]])
-    return a
-
-
-def poly_to_reflection(f: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`reflection_to_poly` for a stable monic F (roots inside |z| < 1)."""
-    a = np.asarray(f, dtype=float).copy()
-    n = a.size - 1
-    ks = np.zeros(n)
-    for m in range(n, 0, -1):
-        k = float(np.clip(a[m], -0.999999, 0.999999))
-        ks[m - 1] = k
-        a = (a[:m] - k * a[m:0:-1]) / (1.0 - k * k)
-    return np.arctanh(ks)
-
-
-def stabilise(f: np.ndarray, radius: float = 0.999) -> np.ndarray:
-    """Reflect roots of F outside the unit circle inside (``r -> 1/conj(r)``, which keeps
-    the magnitude response up to a gain) and clip them to ``radius``."""
-    f = np.asarray(f, dtype=float)
-    if f.size <= 1:
-        return f
-    r = np.roots(f)
-    if np.all(np.abs(r) < radius):
-        return f
-    r = np.where(np.abs(r) > 1.0, 1.0 / np.conj(r), r)
-    mag = np.abs(r)
-    r = np.where(mag >= radius, r / np.maximum(mag, 1e-300) * radius, r)
-    return np.real(np.poly(r))
-
-
-# ---------------------------------------------------------------------------------------
-# Linear output-error fit
-# ---------------------------------------------------------------------------------------
-def _delay(x, nk):
-    if nk == 0:
-        return x
-    return np.concatenate([np.zeros(min(nk, x.size)), x[: max(0, x.size - nk)]])
-
-
-def _regressors(u, y, nb, nf, nk):
-    n = y.size
-    cols = []
-    for i in range(1, nf + 1):
-        cols.append(-_delay(y, i))
-    for j in range(nb):
-        cols.append(_delay(u, nk + j))
-    return np.column_stack(cols) if cols else np.zeros((n, 0))
-
-
-def oe_fit(u, y, nb: int, nf: int, nk: int, iterations: int = 12):
-    """Linear output-error fit ``y = q^-nk B/F u`` (initialisation of the HW fit).
-
-    Steiglitz-McBride iterations (prefiltered least squares), stabilised, then refined by
-    minimising the simulation error. Returns ``(b, f)`` with ``f`` monic and stable.
-    """
-    u = np.asarray(u, dtype=float)
-    y = np.asarray(y, dtype=float)
-    if nb < 1 or nf < 0 or nk < 0:
-        raise ValueError("need nb >= 1, nf >= 0, nk >= 0")
-    f = np.array([1.0])
-    b = np.zeros(nb)
-    for _ in range(iterations if nf else 1):
-        uf = signal.lfilter([1.0], f, u)
-        yf = signal.lfilter([1.0], f, y)
-        phi = _regressors(uf, yf, nb, nf, nk)
-        theta, *_ = np.linalg.lstsq(phi, yf, rcond=None)
-        f = stabilise(np.concatenate([[1.0], theta[:nf]]))
-        b = theta[nf:]
-    rho0 = poly_to_reflection(f)
-
-    def resid(p):
-        bb = p[:nb]
-        ff = reflection_to_poly(p[nb:])
-        return _delay(signal.lfilter(bb, ff, u), nk) - y
-
-    p0 = np.concatenate([b, rho0])
-    try:
-        lb = np.concatenate([np.full(nb, -np.inf), np.full(p0.size - nb, -RHO_MAX)])
-        p0 = np.clip(p0, -np.concatenate([np.full(nb, np.inf), np.full(p0.size - nb, RHO_MAX - 1e-6)]),
-                     np.concatenate([np.full(nb, np.inf), np.full(p0.size - nb, RHO_MAX - 1e-6)]))
-        sol = optimize.least_squares(resid, p0, bounds=(lb, -lb), x_scale="jac",
-                                     max_nfev=20 * (p0.size + 1))
-        if np.sum(sol.fun ** 2) < np.sum(resid(p0) ** 2):
-            p0 = sol.x
-    except (ValueError, np.linalg.LinAlgError):
-        pass
-    return p0[:nb].copy(), reflection_to_poly(p0[nb:])
-
-
-# ---------------------------------------------------------------------------------------
-# HW fit
-# ---------------------------------------------------------------------------------------
-@dataclass
-class HWFit:
-    """Result of :func:`hw_fit`: blocks and fit on the identification data."""
-
-    b: np.ndarray
-    f: np.ndarray
-    nk: int
-    g: MonotonePiecewiseLinear
-    fit_linear: float
-    fit: float
-    nfev: int = 0
-
-
-def _g_from_params(knots, theta, i0):
-    slopes = np.exp(theta - theta.mean())
-    vals = np.zeros(knots.size)
-    d = np.diff(knots) * slopes
-    vals[i0 + 1:] = np.cumsum(d[i0:])
-    vals[:i0] = -np.cumsum(d[:i0][::-1])[::-1]
-    return vals
-
-
-def _hat_basis(knots, x):
-    """Piecewise-linear (hat) basis at ``knots`` evaluated at ``x`` (linear extrapolation)."""
-    m = knots.size
-    i = np.clip(np.searchsorted(knots, x, side="right") - 1, 0, m - 2)
-    t = (x - knots[i]) / (knots[i + 1] - knots[i])
-    phi = np.zeros((x.size, m))
-    rows = np.arange(x.size)
-    phi[rows, i] = 1.0 - t
-    phi[rows, i + 1] += t
-    return phi
-
-
-def _fit_monotone_g(knots, i0, x, y):
-    """Least-squares strictly increasing g through ``(knots, v)`` with ``v[i0] = 0``."""
-    m = knots.size
-    phi = _hat_basis(knots, x)
-    # v = T d, d >= 0 (increments), v[i0] = 0
-    T = np.zeros((m, m - 1))
-    for j in range(m):
-        if j > i0:
-            T[j, i0:j] = 1.0
-        elif j < i0:
-            T[j, j:i0] = -1.0
-    d, _ = optimize.nnls(phi @ T, y)
-    floor = 1e-3 * max(float(np.mean(d)), 1e-12)
-    d = np.maximum(d, floor)
-    return T @ d
-
-
-def _normalise(knots, vals, b):
-    """Rescale so that g has geometric-mean slope 1 (x -> s x, b -> s b)."""
-    slopes = np.diff(vals) / np.diff(knots)
-    s = float(np.exp(np.mean(np.log(slopes))))
-    return knots * s, vals, b * s
-
-
-def hw_fit(u, y, nb: int, nf: int, nk: int, n_breakpoints: int = N_BREAKPOINTS,
-           max_nfev: int | None = None, alternations: int = 4) -> HWFit:
-    """Hammerstein-Wiener fit by simulation-error minimisation.
-
-    Initialisation: linear OE fit, then ``alternations`` rounds of (monotone least-squares
-    fit of ``g`` on the linear output; OE fit of the linear block to ``g^-1(y)``), keeping
-    the best. Then all parameters together by ``scipy.optimize.least_squares``.
-
-    Parameters
-    ----------
-    u : ndarray, shape (n,)
-        Input (impulse train, dimensionless).
-    y : ndarray, shape (n,)
-        Output (m/s²).
-    nb, nf, nk : int
-        Orders of B, F and the pure delay (samples).
-    n_breakpoints : int
-        Breakpoints of ``g`` (< 3 means ``g`` is the identity).
-
-    Returns
-    -------
-    HWFit
-    """
-    u = np.asarray(u, dtype=float)
-    y = np.asarray(y, dtype=float)
-    b0, f0 = oe_fit(u, y, nb, nf, nk)
-    x0 = _delay(signal.lfilter(b0, f0, u), nk)
-    fit_lin = fit_percent(y, x0)
-    if n_breakpoints < 3:
-        g = MonotonePiecewiseLinear.identity(max(1.0, float(np.max(np.abs(y)))))
-        return HWFit(b0, f0, nk, g, fit_lin, fit_lin)
-
-    def make_knots(x):
-        lo, hi = float(x.min()), float(x.max())
-        span = max(hi - lo, 1e-12)
-        lo, hi = min(lo - 0.05 * span, -1e-6 * span), max(hi + 0.05 * span, 1e-6 * span)
-        k = np.linspace(lo, hi, n_breakpoints - 1)
-        k = np.unique(np.concatenate([k[np.abs(k) > 1e-3 * span], [0.0]]))
-        return k, int(np.flatnonzero(k == 0.0)[0])
-
-    best = (fit_lin, b0, f0, None, None)
-    b, f = b0, f0
-    for _ in range(alternations):
-        x = _delay(signal.lfilter(b, f, u), nk)
-        knots, i0 = make_knots(x)
-        vals = _fit_monotone_g(knots, i0, x, y)
-        g = MonotonePiecewiseLinear(knots, vals)
-        fit_now = fit_percent(y, g(x))
-        if fit_now > best[0] or best[3] is None:
-            best = (fit_now, b, f, knots, vals)
-        knots_n, vals_n, _ = _normalise(knots, vals, b)
-        z = MonotonePiecewiseLinear(knots_n, vals_n).inverse(y)
-        b, f = oe_fit(u, z, nb, nf, nk)
-    _, b, f, knots, vals = best
-    knots, vals, b = _normalise(knots, vals, b)
-    i0 = int(np.flatnonzero(knots == 0.0)[0])
-    ng = knots.size - 1
-    nrho = f.size - 1
-    slopes = np.diff(vals) / np.diff(knots)
-    th0 = np.log(slopes)
-
-    def unpack(p):
-        return p[:nb], reflection_to_poly(p[nb:nb + nrho]), p[nb + nrho:]
-
-    def predict(p):
-        bb, ff, th = unpack(p)
-        v = _g_from_params(knots, th, i0)
-        x = _delay(signal.lfilter(bb, ff, u), nk)
-        return evaluate_piecewise_linear(knots, v, x)
-
-    def resid(p):
-        return predict(p) - y
-
-    p0 = np.concatenate([b, poly_to_reflection(f), th0 - th0.mean()])
-    lb = np.concatenate([np.full(nb, -np.inf), np.full(nrho, -RHO_MAX), np.full(ng, -6.0)])
-    ub = -lb
-    p0 = np.clip(p0, lb + 1e-9, ub - 1e-9)
-    nfev = 0
-    try:
-        sol = optimize.least_squares(resid, p0, bounds=(lb, ub), x_scale="jac",
-                                     max_nfev=max_nfev or 30 * (p0.size + 1))
-        nfev = int(sol.nfev)
-        p = sol.x if np.sum(sol.fun ** 2) <= np.sum(resid(p0) ** 2) else p0
-    except (ValueError, np.linalg.LinAlgError):
-        p = p0
-    bb, ff, th = unpack(p)
-    g = MonotonePiecewiseLinear(knots, _g_from_params(knots, th, i0))
-    fit = fit_percent(y, g(_delay(signal.lfilter(bb, ff, u), nk)))
-    return HWFit(bb.copy(), ff, nk, g, fit_lin, fit, nfev)
-
-
-# ---------------------------------------------------------------------------------------
-# Preprocessing: frequency, phase, periods
-# ---------------------------------------------------------------------------------------
 def envelope(y: np.ndarray) -> np.ndarray:
     """Squared-magnitude envelope ``|y + j H(y)|^2`` minus its mean (m²/s⁴)."""
     e = np.abs(signal.hilbert(np.asarray(y, dtype=float))) ** 2
@@ -456,6 +178,37 @@ def fit_modulation(amps, t_k, shaft_frequency: float):
 # Whole pipeline
 # ---------------------------------------------------------------------------------------
 @dataclass
+class Preprocessing:
+    """What :func:`identify_fault_model` measured on the record before the fit.
+
+    Frequencies in Hz, phases in rad (:mod:`.impulse_trains` convention). The inner-race
+    fields (eq. 2.58 fit of the per-impact amplitudes) and the outer-race fields
+    (representative period) are None for the other fault. Stored in the model file's
+    provenance (``preprocessing``, None fields left out).
+    """
+
+    kinematic_frequency: float
+    fault_frequency: float
+    phase: float
+    periods: int
+    shaft_phase: float | None = None
+    offset: float | None = None
+    modulation_amplitude: float | None = None
+    modulation_r2: float | None = None
+    n_average: int | None = None
+    plain_average_energy_ratio: float | None = None
+    representative_period: int | None = None
+    representative_correlation: float | None = None
+    mode: str = "thesis"
+    phase_refined: float | None = None
+    identification_seconds: float | None = None
+
+    def to_dict(self) -> dict:
+        """The fields that apply, in field order."""
+        return {k: v for k, v in asdict(self).items() if v is not None}
+
+
+@dataclass
 class IdentificationResult:
     """Everything :func:`identify_fault_model` found (the model plus diagnostics)."""
 
@@ -467,7 +220,7 @@ class IdentificationResult:
     y_series: np.ndarray
     yhat_series: np.ndarray
     id_mask: np.ndarray
-    info: dict = field(default_factory=dict)
+    preprocessing: Preprocessing
 
 
 def _train_for(model_kind_ir, n, fs, freq, phase, fr, theta, c, width, start_time=0.0):
@@ -477,10 +230,9 @@ def _train_for(model_kind_ir, n, fs, freq, phase, fr, theta, c, width, start_tim
     return impulse_train(n, fs, freq, phase, start_time, pulse_width=width)
 
 
-def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
+def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bearing | str, orders=None,
                          n_breakpoints: int = N_BREAKPOINTS, n_average: int = N_AVERAGE_IR,
-                         refine_frequency: bool = True, provenance: dict | None = None,
-                         geometry=DRIVE_END_6205, mode: str = "thesis",
+                         refine_frequency: bool = True, provenance: dict | None = None, mode: str = "thesis",
                          n_series: int = 8) -> IdentificationResult:
     """Identify the HW model of one fault type from a record of that fault.
 
@@ -494,6 +246,9 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
         Shaft speed (rev/min).
     fault : FaultState or str
         ``outer_race`` or ``inner_race``.
+    bearing : Bearing or str
+        The machine's bearing (anything :func:`bearing_common.bearings.load_bearing` reads):
+        gives the kinematic fault frequency; recorded in the model's provenance.
     orders : (nb, nf, nk), optional
         Linear-block orders; default :data:`DEFAULT_ORDERS`.
     n_breakpoints : int
@@ -529,7 +284,8 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
     nb, nf, nk = orders or DEFAULT_ORDERS[fault_type]
     fs = float(sample_rate)
     fr = rpm / 60.0
-    f_kin = kinematic_frequency(geometry, state, rpm)
+    bearing = load_bearing(bearing)
+    f_kin = bearing.frequencies(rpm).of(state)
     freq = refine_fault_frequency(y, fs, f_kin) if refine_frequency else f_kin
     phase = estimate_fault_phase(y, fs, freq)
     per = cut_periods(y, fs, freq, phase)
@@ -537,8 +293,7 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
         raise ValueError("record too short: need at least 3 whole fault periods")
     amps, template = rank1(per.matrix)
     width = 1.0 / fs
-    info = {"kinematic_frequency": f_kin, "fault_frequency": freq, "phase": phase,
-            "periods": int(per.matrix.shape[0])}
+    prep = Preprocessing(float(f_kin), float(freq), float(phase), int(per.matrix.shape[0]))
     if is_ir:
         a, theta, c, r2 = fit_modulation(amps, per.impact_times, fr)
         m = np.cos(TWO_PI * fr * per.impact_times + theta) + c
@@ -546,16 +301,16 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
         sel = np.arange(n_avg)
         y_id = (m[sel] @ per.matrix[sel]) / float(m[sel] @ m[sel])
         plain = per.matrix[sel].mean(axis=0)
-        info.update(shaft_phase=theta, offset=c, modulation_amplitude=a, modulation_r2=r2,
-                    n_average=int(n_avg),
-                    plain_average_energy_ratio=float(plain @ plain) / max(float(y_id @ y_id), 1e-300))
+        prep.shaft_phase, prep.offset, prep.modulation_amplitude, prep.modulation_r2 = theta, c, a, r2
+        prep.n_average = int(n_avg)
+        prep.plain_average_energy_ratio = float(plain @ plain) / max(float(y_id @ y_id), 1e-300)
     else:
         theta, c = 0.0, 0.0
         corr = (per.matrix @ template) / np.maximum(np.linalg.norm(per.matrix, axis=1), 1e-300)
         best = int(np.argmax(corr))
         sel = np.array([best])
         y_id = per.matrix[best].copy()
-        info.update(representative_period=best, representative_correlation=float(corr[best]))
+        prep.representative_period, prep.representative_correlation = best, float(corr[best])
     if mode == "thesis":
         # Identification input: the unit train over the segment (impact ``pre`` samples in).
         s0 = per.starts[sel[0]]
@@ -567,7 +322,7 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
         y_id = y[s0:s1].copy()
     else:
         raise ValueError(f"mode must be 'thesis' or 'series', got {mode!r}")
-    info["mode"] = mode
+    prep.mode = mode
     fit = hw_fit(u_id, y_id, nb, nf, nk, n_breakpoints)
     lin_in = MonotonePiecewiseLinear.gain(1.0)
     model = HWModel(fault_type=fault_type, sample_rate=fs, rpm=float(rpm), fault_frequency=freq,
@@ -576,7 +331,7 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
     yhat_id = model.simulate(u_id)
     # Align the strictly periodic train with the record (sub-sample phase scan, ±1/4 period)
     phase = refine_phase(model, y, phase, fr, theta, c)
-    info["phase_refined"] = phase
+    prep.phase_refined = phase
     # time series with the identified train (strictly periodic)
     u_series = _train_for(is_ir, y.size, fs, freq, phase, fr, theta, c, width)
     yhat_series = model.simulate(u_series)
@@ -589,32 +344,32 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, orders=None,
     held[: per.starts[0]] = False  # before the first whole period: no full model response
     per_fits = [fit_percent(y[s:s + per.length], yhat_series[s:s + per.length])
                 for i, s in enumerate(per.starts) if i not in set(sel.tolist())]
-    model.fit = {
-        "identification": fit.fit,
-        "identification_linear_only": fit.fit_linear,
-        "held_back": fit_percent(y[held], yhat_series[held]),
-        "held_back_periods_median": float(np.median(per_fits)) if per_fits else None,
-        "time_series": fit_percent(y[per.starts[0]:], yhat_series[per.starts[0]:]),
+    model.fit = ModelFit(
+        identification=fit.fit,
+        identification_linear_only=fit.fit_linear,
+        held_back=fit_percent(y[held], yhat_series[held]),
+        held_back_periods_median=float(np.median(per_fits)) if per_fits else None,
+        time_series=fit_percent(y[per.starts[0]:], yhat_series[per.starts[0]:]),
         # the same with the single least-squares amplitude: how much a strictly periodic
         # train can explain at all (real impacts wander; see shared/diagnosis-notes.md)
-        "time_series_ls_amplitude": _ls_scaled_fit(y[per.starts[0]:], yhat_series[per.starts[0]:]),
-        "identification_samples": int(y_id.size),
-        "held_back_samples": int(held.sum()),
-        "series_seconds": y.size / fs,
-    }
-    info["identification_seconds"] = time.perf_counter() - t0
+        time_series_ls_amplitude=_ls_scaled_fit(y[per.starts[0]:], yhat_series[per.starts[0]:]),
+        identification_samples=int(y_id.size),
+        held_back_samples=int(held.sum()),
+        series_seconds=y.size / fs,
+    )
+    prep.identification_seconds = time.perf_counter() - t0
     model.provenance = dict(provenance or {})
     model.provenance.setdefault("date", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
-    model.provenance["preprocessing"] = {
-        k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in info.items()}
-    return IdentificationResult(model, u_id, y_id, yhat_id, u_series, y, yhat_series, id_mask, info)
+    model.provenance["bearing"] = bearing.to_dict()
+    model.provenance["preprocessing"] = prep.to_dict()
+    return IdentificationResult(model, u_id, y_id, yhat_id, u_series, y, yhat_series, id_mask, prep)
 
 
-def _ls_scaled_fit(y, yhat):
+def _ls_scaled_fit(y, yhat) -> tuple[float, float]:
     """(fit %, gain) of ``gain * yhat`` with the least-squares gain."""
     den = float(np.sum(yhat * yhat))
     gain = float(np.sum(y * yhat)) / den if den > 0 else 0.0
-    return [fit_percent(y, gain * yhat), gain]
+    return fit_percent(y, gain * yhat), gain
 
 
 def refine_phase(model: HWModel, y, phase: float, shaft_frequency: float, theta: float,
@@ -643,26 +398,3 @@ def refine_phase(model: HWModel, y, phase: float, shaft_frequency: float, theta:
     scan(phase, span * period, coarse)          # coarse over ±span periods
     scan(best, coarse, step_samples)            # fine: every step_samples around the best
     return float(np.mod(best, TWO_PI))
-
-
-def order_search(u, y, nb_range, nf_range, nk_range, n_breakpoints: int = N_BREAKPOINTS,
-                 u_val=None, y_val=None):
-    """Fit per order: list of dicts ``{nb, nf, nk, fit, fit_linear, fit_validation}``.
-
-    ``u_val``/``y_val`` (optional) validate each model by simulation on other data.
-    """
-    rows = []
-    for nb in nb_range:
-        for nf in nf_range:
-            for nk in nk_range:
-                try:
-                    r = hw_fit(u, y, nb, nf, nk, n_breakpoints)
-                except (ValueError, np.linalg.LinAlgError) as exc:
-                    rows.append({"nb": nb, "nf": nf, "nk": nk, "error": str(exc)})
-                    continue
-                row = {"nb": nb, "nf": nf, "nk": nk, "fit": r.fit, "fit_linear": r.fit_linear}
-                if u_val is not None:
-                    yv = r.g(_delay(signal.lfilter(r.b, r.f, u_val), nk))
-                    row["fit_validation"] = fit_percent(y_val, yv)
-                rows.append(row)
-    return rows
