@@ -1,8 +1,8 @@
 """Run several node processes side by side, with prefixed output and a clean stop.
 
 Used by ``bearing-graph`` (the ``make demo`` starter, for machines without
-``ros2 launch``) and by the test harness. Each child runs in its own session
-(process group) so that stopping it also stops anything it started; ``stop()``
+``ros2 launch``) and by the test harness. Each child runs in its own process
+group so that stopping it also stops anything it started; ``stop()``
 sends SIGINT, then SIGTERM, then SIGKILL, and always reaps. No rclpy here.
 """
 
@@ -59,15 +59,21 @@ class ProcessGroup:
         self._lock = threading.Lock()
         self._width = 10
 
-    def start(self, name: str, argv: list, extra_env: dict | None = None) -> Member:
-        """Start ``argv`` as member ``name``; output is captured line by line."""
+    def start(self, name: str, argv: list, extra_env: dict | None = None, join: Member | None = None) -> Member:
+        """Start ``argv`` as member ``name``; output is captured line by line.
+
+        The child gets a process group of its own, or with ``join`` it enters that
+        member's (a signal to the group then reaches both, as a terminal's Ctrl-C
+        reaches every process started by ``ros2 launch``).
+        """
         env = dict(self.env)
         env.update(extra_env or {})
         env.setdefault("PYTHONUNBUFFERED", "1")
         env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
+        group = 0 if join is None else os.getpgid(join.process.pid)
         proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL, text=True, bufsize=1,
-                                start_new_session=True, preexec_fn=_die_with_parent)
+                                process_group=group, preexec_fn=_die_with_parent)
         member = Member(name, list(argv), proc)
         self._width = max(self._width, len(name))
         member.reader = threading.Thread(target=self._pump, args=(member,), daemon=True)

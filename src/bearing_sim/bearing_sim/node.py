@@ -116,7 +116,7 @@ def warm_up(node: SimulatorNode) -> None:
     node.get_logger().info(f"simulator ready after {time.monotonic() - start:.2f} s of loading/compilation")
 
 
-def wait_for_subscribers(node: SimulatorNode) -> None:
+def wait_for_subscribers(node: SimulatorNode, stop) -> None:
     """Hold the start until the graph's consumers are matched (published chunks are not latched)."""
     wanted = parse_wait_spec(node.values["wait_for_subscribers"])
     deadline = time.monotonic() + float(node.values["subscriber_timeout"])
@@ -124,24 +124,24 @@ def wait_for_subscribers(node: SimulatorNode) -> None:
     def missing():
         return [(t, n, node.count_subscribers(t)) for t, n in wanted if node.count_subscribers(t) < n]
 
-    while rclpy.ok() and missing() and time.monotonic() < deadline:
+    while not stop and missing() and time.monotonic() < deadline:
         rclpy.spin_once(node, timeout_sec=0.05)
     for topic, n, have in missing():
         node.get_logger().warn(f"starting with {have} of {n} subscribers to {topic}")
 
 
-def run_node(node: SimulatorNode) -> None:
+def run_node(node: SimulatorNode, stop) -> None:
     """Publish until the run ends, pacing to wall-clock time when asked; log the real-time
     factor of the compute (simulated seconds per CPU second of this thread spent
     simulating and publishing: not lowered by other processes sharing the cores)."""
     warm_up(node)
-    wait_for_subscribers(node)
+    wait_for_subscribers(node, stop)
     realtime = bool(node.values["realtime"])
     wall_start = time.monotonic()
     sim_seconds = 0.0
     busy = 0.0
     last_log = wall_start
-    while rclpy.ok():
+    while not stop:
         t_busy = time.thread_time()
         if not node.step():
             break
@@ -163,7 +163,7 @@ def run_node(node: SimulatorNode) -> None:
     node.get_logger().info(f"run ended after {sim_seconds:.3f} s simulated; compute real-time factor "
                            f"{sim_seconds / max(busy, 1e-9):.2f}")
     linger_end = time.monotonic() + float(node.values["linger"])
-    while rclpy.ok() and time.monotonic() < linger_end:
+    while not stop and time.monotonic() < linger_end:
         rclpy.spin_once(node, timeout_sec=0.05)
 
 
