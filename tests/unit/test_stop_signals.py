@@ -1,4 +1,4 @@
-"""StopSignals: a signal sets the flag (no KeyboardInterrupt); later ones are ignored; handlers stay once stopping."""
+"""StopSignals: a signal sets the flag (no KeyboardInterrupt); later ones are ignored, also after the block."""
 
 import os
 import signal
@@ -21,7 +21,8 @@ def test_first_signal_is_recorded_and_later_ones_ignored():
         os.kill(os.getpid(), signal.SIGTERM)
         os.kill(os.getpid(), signal.SIGINT)
         assert stop and stop.signal == signal.SIGTERM
-    os.kill(os.getpid(), signal.SIGINT)  # still ours after the block: stopping is under way
+    assert signal.getsignal(signal.SIGINT) is signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+    os.kill(os.getpid(), signal.SIGINT)  # stopping is under way: no KeyboardInterrupt
     assert stop.signal == signal.SIGTERM
 
 

@@ -5,8 +5,10 @@ wind down in their own time, so no KeyboardInterrupt or context shutdown strikes
 in the middle of a publish or a clean-up. Further signals while stopping are
 ignored: a terminal Ctrl-C under ``ros2 launch`` reaches a node twice (from the
 terminal and from launch), and the second must not cut the clean-up short. For
-the same reason, once a stop was requested the handlers stay installed after the
-``with`` block, until the process exits; without a stop the previous ones return.
+the same reason, once a stop was requested, leaving the ``with`` block makes the
+signals ignored until the process exits (Python resets its own handlers to the
+default, deadly, action while it finalizes; an ignored signal stays ignored);
+without a stop the previous handlers return.
 """
 
 from __future__ import annotations
@@ -33,9 +35,8 @@ class StopSignals:
             self.signal = signum
 
     def __exit__(self, *exc) -> None:
-        if self.signal is None:
-            for sig, old in self._old.items():
-                signal.signal(sig, old)
+        for sig, old in self._old.items():
+            signal.signal(sig, old if self.signal is None else signal.SIG_IGN)
 
     def __bool__(self) -> bool:
         return self.signal is not None
