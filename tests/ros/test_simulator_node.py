@@ -51,7 +51,7 @@ def test_realtime_pacing_keeps_wall_clock(ros_graph):
 
 
 @pytest.mark.parametrize("param, value, reason", [
-    ("rpm", -100.0, "rpm: must be > 0"),
+    ("rpm", -100.0, "rpm: must be in (0, 6000]"),
     ("scenario", "bogus", "unknown scenario"),
     ("rpm", 1800, "wrong type"),
 ])
