@@ -59,6 +59,13 @@ class SimulatorNode(Node):
             return "normal operation (no end)"
         return ", ".join(f"{state.label} {seconds:g} s" for state, seconds in self.run.schedule)
 
+    def subscribers(self, topic: str) -> int:
+        """Subscriptions matched by our publisher of ``topic`` (samples published from now on reach
+        them: what a volatile stream needs), else the graph's count for topics of other nodes."""
+        own = {topics.VIBRATION.name: self.pub_vib, topics.UNBALANCE.name: self.pub_unb,
+               topics.SHAFT_SPEED.name: self.pub_speed, topics.TRUTH.name: self.pub_truth}
+        return own[topic].get_subscription_count() if topic in own else self.count_subscribers(topic)
+
     def on_change(self, changed: dict) -> None:
         """Apply live parameter changes (from the next chunk on)."""
         if "rpm" in changed:
@@ -118,9 +125,9 @@ def run_node(node: SimulatorNode, stop) -> None:
         warm_up(node, stop)
         gate = SubscriberGate(parse_wait_spec(node.values["wait_for_subscribers"]),
                               float(node.values["subscriber_timeout"]), time.monotonic())
-        while not stop and not gate.is_open(node.count_subscribers, time.monotonic()):
+        while not stop and not gate.is_open(node.subscribers, time.monotonic()):
             executor.spin_once(timeout_sec=0.05)
-        for topic, n, have in gate.missing(node.count_subscribers):
+        for topic, n, have in gate.missing(node.subscribers):
             node.get_logger().warn(f"starting with {have} of {n} subscribers to {topic}")
         publish(node, executor, stop)
         linger_end = time.monotonic() + float(node.values["linger"])
