@@ -22,13 +22,15 @@ from typing import TextIO
 
 @dataclass
 class Member:
-    """One child process of a group."""
+    """One child process of a group (the latest one, after restarts)."""
 
     name: str
     argv: list
+    env: dict
     process: subprocess.Popen
     lines: list = field(default_factory=list)  # everything it printed, for tests and post-mortems
     reader: threading.Thread | None = None
+    restarts: int = 0
 
     @property
     def returncode(self) -> int | None:
@@ -71,18 +73,33 @@ class ProcessGroup:
         env.setdefault("PYTHONUNBUFFERED", "1")
         env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
         group = 0 if join is None else os.getpgid(join.process.pid)
-        proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, text=True, bufsize=1,
-                                process_group=group, preexec_fn=_die_with_parent)
-        member = Member(name, list(argv), proc)
+        member = Member(name, list(argv), env, self._spawn(argv, env, group))
         self._width = max(self._width, len(name))
-        member.reader = threading.Thread(target=self._pump, args=(member,), daemon=True)
-        member.reader.start()
+        self._read(member)
         self.members.append(member)
         return member
 
-    def _pump(self, member: Member) -> None:
-        for line in member.process.stdout:
+    def restart(self, member: Member) -> None:
+        """Start an exited member's command again, in a process group of its own; its
+        output continues in ``member.lines`` under the same name."""
+        member.process.wait()
+        member.reader.join(timeout=2.0)
+        member.process = self._spawn(member.argv, member.env, 0)
+        member.restarts += 1
+        self._read(member)
+
+    @staticmethod
+    def _spawn(argv: list, env: dict, process_group: int) -> subprocess.Popen:
+        return subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                stdin=subprocess.DEVNULL, text=True, bufsize=1,
+                                process_group=process_group, preexec_fn=_die_with_parent)
+
+    def _read(self, member: Member) -> None:
+        member.reader = threading.Thread(target=self._pump, args=(member, member.process), daemon=True)
+        member.reader.start()
+
+    def _pump(self, member: Member, process: subprocess.Popen) -> None:
+        for line in process.stdout:
             line = line.rstrip("\n")
             member.lines.append(line)
             if self.on_line is not None:
