@@ -27,7 +27,7 @@ from bearing_common.stop_signals import StopSignals
 
 from .graph import CONFIG_NAME, GRAPH, config_path
 from .process_group import ProcessGroup
-from .restart_policy import RestartPolicy
+from .restart_policy import MAX_RESTARTS, RESTART_DELAY_S, RestartPolicy
 from .state_report import evaluate, format_table
 
 SIMULATOR = "simulator"  # the node whose exit 0 ends the scenario
@@ -74,8 +74,9 @@ def main(argv=None) -> int:
     parser.add_argument("--settle", type=float, default=30.0,
                         help="at most this many wall seconds for the diagnoser to decide the last window "
                              "after the simulator ends")
-    parser.add_argument("--restart-delay", type=float, default=1.0, help="seconds before a dead node is restarted")
-    parser.add_argument("--max-restarts", type=int, default=5,
+    parser.add_argument("--restart-delay", type=float, default=RESTART_DELAY_S,
+                        help="seconds before a dead node is restarted")
+    parser.add_argument("--max-restarts", type=int, default=MAX_RESTARTS,
                         help="restarts of one node per minute before the graph stops (crash loop)")
     args = parser.parse_args(argv)
 

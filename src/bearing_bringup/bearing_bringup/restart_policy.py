@@ -15,6 +15,9 @@ import signal
 from dataclasses import dataclass
 
 EXIT_INVALID_PARAMETERS = 2
+RESTART_DELAY_S = 1.0  #: s before a dead node is restarted (also the launch file's respawn_delay)
+MAX_RESTARTS = 5  #: restarts of one node per window (the launch file: in total, launch has no window)
+WINDOW_S = 60.0  #: s
 
 
 def describe_exit(returncode: int) -> str:
@@ -36,7 +39,7 @@ class Verdict:
 class RestartPolicy:
     """Restart decisions for the nodes of one graph; times in monotonic seconds."""
 
-    def __init__(self, delay: float = 1.0, max_restarts: int = 5, window: float = 60.0):
+    def __init__(self, delay: float = RESTART_DELAY_S, max_restarts: int = MAX_RESTARTS, window: float = WINDOW_S):
         self.delay = delay
         self.max_restarts = max_restarts
         self.window = window
