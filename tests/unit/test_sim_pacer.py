@@ -2,25 +2,27 @@
 
 import pytest
 
+from bearing_common import topics
 from bearing_sim.pacer import Pacer, SubscriberGate
 
-COUNTS = {"vibration/drive_end": 1, "residual/outer_race": 1}
+VIB, RES = topics.VIBRATION.name, topics.RESIDUAL_OUTER_RACE.name
+COUNTS = {VIB: 1, RES: 1}
 
 
 def test_gate_waits_for_every_topic_then_opens():
-    gate = SubscriberGate([("vibration/drive_end", 2), ("residual/outer_race", 1)], timeout=30.0, now=100.0)
+    gate = SubscriberGate([(VIB, 2), (RES, 1)], timeout=30.0, now=100.0)
     count = lambda topic: COUNTS.get(topic, 0)
-    assert gate.missing(count) == [("vibration/drive_end", 2, 1)]
+    assert gate.missing(count) == [(VIB, 2, 1)]
     assert not gate.is_open(count, now=110.0)
-    COUNTS["vibration/drive_end"] = 2
+    COUNTS[VIB] = 2
     try:
         assert gate.is_open(count, now=110.0) and gate.missing(count) == []
     finally:
-        COUNTS["vibration/drive_end"] = 1
+        COUNTS[VIB] = 1
 
 
 def test_gate_opens_at_the_timeout_and_an_empty_gate_at_once():
-    gate = SubscriberGate([("vibration/drive_end", 5)], timeout=30.0, now=100.0)
+    gate = SubscriberGate([(VIB, 5)], timeout=30.0, now=100.0)
     assert not gate.is_open(lambda _: 0, now=129.9)
     assert gate.is_open(lambda _: 0, now=130.0)
     assert SubscriberGate([], timeout=30.0, now=0.0).is_open(lambda _: 0, now=0.0)
