@@ -11,11 +11,12 @@ import sys
 import time
 
 import pytest
-from graph_helpers import params_file
+from graph_helpers import BAG_CLI, params_file
 from ros_harness import REPO_ROOT
 
 from bearing_bringup.graph import GRAPH
 from bearing_common import topics
+from bearing_recordings.bag_read import read_bag
 
 pytestmark = pytest.mark.ros
 
@@ -64,11 +65,19 @@ def test_each_node_stops_cleanly_alone(ros_graph, mode):
 
 
 @pytest.mark.parametrize("mode", MODES)
-def test_the_whole_graph_stops_cleanly_as_one_process_group(ros_graph, mode):
+def test_the_whole_graph_stops_cleanly_as_one_process_group(ros_graph, mode, tmp_path):
+    """... with a bearing-bag recorder in the group, whose bag is then complete."""
     members = start_graph(ros_graph, one_group=True)
+    recorder = ros_graph.start("", "", name="bag_record", join=members["simulator"],
+                               argv=BAG_CLI + ["record", "--out", str(tmp_path / "bag")])
+    for topic in (topics.VIBRATION, topics.FAULT_STATE):
+        seen = f"first message on {topics.qualified('', topic)}"
+        ros_graph.wait_until(lambda seen=seen: any(seen in line for line in recorder.lines), 60.0, seen)
     send(os.getpgid(members["simulator"].process.pid), mode)
-    for member in members.values():
+    for member in [*members.values(), recorder]:
         assert_clean_exit(member)
+    bag = read_bag(tmp_path / "bag")
+    assert bag.chunks and bag.fault_states
 
 
 @pytest.mark.parametrize("mode", MODES)
