@@ -34,10 +34,12 @@ OUTPUT = {"simulator": topics.VIBRATION, "or_observer": topics.RESIDUAL_OUTER_RA
           "ir_observer": topics.RESIDUAL_INNER_RACE, "diagnoser": topics.FAULT_STATE}
 STARTED = re.compile(r"\] (started|restarted) (\w+) \(pid (\d+)\)")
 STABLE_S = 3.0  # s of fault_state stamps that must follow the recovery, all correct
+RECOVERY_TIMEOUT_S = 60.0  # s after the restarted node's output is back
 DIAGNOSER_FALSE_STATES = (
-    "bearing_diagnoser: while one observer is down the diagnoser keeps deciding from the other residual alone "
-    "and publishes INNER_RACE / UNKNOWN on outer-race data (and needs seconds after the observer is back); "
-    "it should hold its state or report the missing residual instead")
+    "bearing_diagnoser: 1 s after an observer died the diagnoser decides from the other residual alone and "
+    "publishes INNER_RACE / UNKNOWN on outer-race data until the observer is back; then the resumed residuals "
+    "are dropped for about (outage - max_lag_s) by decision._Stream (tests/unit/test_diag_stream_outage.py), "
+    "seen as 1.5 to over 35 s more of false states")
 
 
 @dataclass
@@ -65,8 +67,9 @@ class Recovery:
     new_pid: int
     kill_to_restart: float  # s
     kill_to_output: float  # s until the restarted node's first output reached the listener
-    kill_to_state: float  # s until the first correct fault_state computed from it
-    stable: list  # fault_state msgs received in STABLE_S s of stamps after the recovery
+    kill_to_state: float | None  # s until the first correct fault_state computed from it (None: none came)
+    stable: list  # fault_state msgs received in STABLE_S s of stamps after it (after the output if none)
+    latest: object  # the last fault_state the listener had when the late participant started
     late: list  # what a participant started after the recovery received
     exit_line: str
 
@@ -139,11 +142,17 @@ def recovery(request, tmp_path_factory) -> Recovery:
         def correct_after_output():
             return [(at, m) for at, m in states.since(output_at) if m.state == FaultState.OUTER_RACE]
 
-        graph.wait_until(correct_after_output, 120.0, "a correct fault_state after the restart")
-        state_at, first = correct_after_output()[0]
+        try:  # a wrong diagnoser must not stop the other checks: the correctness tests report it
+            graph.wait_until(correct_after_output, RECOVERY_TIMEOUT_S, "a correct fault_state after the restart")
+            state_at, first = correct_after_output()[0]
+        except AssertionError:
+            graph.wait_until(lambda: states.since(output_at), 30.0, "a fault_state after the restart")
+            state_at, first = states.since(output_at)[0]
         graph.wait_until(lambda: stamp(states.items[-1][1]) >= stamp(first) + STABLE_S, 60.0,
                          f"{STABLE_S} s of decisions after the recovery")
         stable = [m for _, m in states.since(state_at)]
+        recovered = first.state == FaultState.OUTER_RACE
+        latest = states.items[-1][1]
         late = late_participant_states(graph.domain_id)
         assert starter.returncode is None, graph.output()
         os.kill(starter.process.pid, signal.SIGINT)
@@ -151,13 +160,15 @@ def recovery(request, tmp_path_factory) -> Recovery:
         result = Recovery(
             victim, list(states.items), [m.group(2) for m in map(STARTED.search, starter.lines)
                                          if m and m.group(1) == "restarted"],
-            old_pid, new_pid, restarted - killed, output_at - killed, state_at - killed, stable, late,
+            old_pid, new_pid, restarted - killed, output_at - killed, state_at - killed if recovered else None,
+            stable, latest, late,
             next((line for line in starter.lines if "exit codes:" in line), ""))
         print(f"\n{victim} killed: restarted after {result.kill_to_restart:.1f} s, its output back after "
-              f"{result.kill_to_output:.1f} s, first correct fault_state after {result.kill_to_state:.1f} s; "
+              f"{result.kill_to_output:.1f} s, first correct fault_state after "
+              f"{'(none)' if result.kill_to_state is None else f'{result.kill_to_state:.1f} s'}; "
               "fault_state changes after the kill (received s after the kill, stamp s, state): "
               + ", ".join(f"{at - killed:.1f} {stamp(m):.2f} {FaultState(m.state).name}"
-                          for at, m in changes(states.since(killed))))
+                          + (f" ({m.detail})" if m.detail else "") for at, m in changes(states.since(killed))))
         yield result
     finally:
         graph.close()
@@ -173,7 +184,7 @@ def test_killed_node_is_restarted_and_the_graph_keeps_running(recovery):
     (the fixture waited for it); Ctrl-C then stops every node cleanly."""
     assert recovery.restarted == [recovery.victim] and recovery.new_pid != recovery.old_pid
     assert 1.0 <= recovery.kill_to_restart < 5.0
-    assert recovery.kill_to_restart < recovery.kill_to_output <= recovery.kill_to_state
+    assert recovery.kill_to_restart < recovery.kill_to_output
     if recovery.victim == "simulator":  # a new stream: stamps back to 0, decided as such
         assert stamp(recovery.stable[0]) < 5.0
     assert recovery.exit_line.endswith("exit codes: simulator 0, or_observer 0, ir_observer 0, diagnoser 0")
@@ -181,6 +192,7 @@ def test_killed_node_is_restarted_and_the_graph_keeps_running(recovery):
 
 def test_fault_states_after_recovery_are_correct(recovery, request):
     xfail_for_observers(recovery, request)
+    assert recovery.kill_to_state is not None, f"no correct fault_state within {RECOVERY_TIMEOUT_S} s"
     assert stamp(recovery.stable[-1]) - stamp(recovery.stable[0]) >= STABLE_S
     false = [(round(stamp(m), 3), FaultState(m.state).name) for m in recovery.stable
              if m.state != FaultState.OUTER_RACE]
@@ -188,9 +200,12 @@ def test_fault_states_after_recovery_are_correct(recovery, request):
 
 
 def test_a_late_participant_gets_the_current_state(recovery):
+    """Transient local from the (possibly restarted) diagnoser: the newest state, as the graph published it."""
     assert recovery.late, "a late subscriber received no fault_state"
-    assert recovery.late[-1].state == FaultState.OUTER_RACE
-    assert stamp(recovery.late[-1]) >= stamp(recovery.stable[-1]) - 0.5
+    newest = recovery.late[-1]
+    assert stamp(newest) >= stamp(recovery.latest)
+    published = {stamp(m): m.state for _, m in recovery.states}
+    assert published[stamp(newest)] == newest.state
 
 
 def test_no_false_fault_state_around_the_restart(recovery, request):
