@@ -57,6 +57,8 @@ def ros_args(name: str | None = None, params: dict | None = None,
     for key, value in (params or {}).items():
         if isinstance(value, bool):
             value = "true" if value else "false"
+        elif value == "":
+            value = "''"
         args += ["-p", f"{key}:={value}"]
     return args
 
@@ -88,10 +90,11 @@ class RosGraph:
                     raise
 
     def start(self, package: str, exe: str, name: str | None = None, params: dict | None = None,
-              params_file: pathlib.Path | None = None, argv: list | None = None):
-        """Start a node executable (or ``argv``) as a separate process; return its Member."""
+              params_file: pathlib.Path | None = None, argv: list | None = None, join=None):
+        """Start a node executable (or ``argv``) as a separate process; return its Member
+        (in the process group of member ``join`` when given, else in one of its own)."""
         command = argv if argv is not None else [str(executable(package, exe))] + ros_args(name, params, params_file)
-        return self.processes.start(name or exe, command)
+        return self.processes.start(name or exe, command, join=join)
 
     def subscribe(self, topic: Topic, namespace: str = "", depth: int = 1000) -> list:
         """Collect every message on ``topic`` (contract QoS, a ``depth``-deep queue) into the returned list."""

@@ -68,3 +68,12 @@ def test_restarted_producer_is_followed():
         stream.check(*chunk(i))
     v = stream.check(*chunk(0))
     assert v.accepted and v.resync and v.reason == "stream restarted"
+
+
+def test_restarted_producer_is_followed_when_its_first_chunks_were_missed():
+    stream = ChunkStream("vib")
+    for i in range(100, 103):
+        stream.check(*chunk(i))
+    v = stream.check(*chunk(2))  # chunks 0 and 1 of the new run never arrived
+    assert v.accepted and v.resync and v.restart and v.reason == "stream restarted"
+    assert stream.check(*chunk(3)).accepted

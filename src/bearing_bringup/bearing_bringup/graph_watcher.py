@@ -10,6 +10,7 @@ from collections.abc import Callable
 import numpy as np
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 
 from bearing_common import topics
 from bearing_common.stamps import to_seconds
@@ -35,7 +36,7 @@ class GraphWatcher:
         self._fs = None
         self._end = None
         self.context = rclpy.Context()
-        rclpy.init(context=self.context)
+        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)  # bearing-graph's own
         ns = f"/{namespace.strip('/')}" if namespace else ""
         self.node = rclpy.create_node("graph_watcher", namespace=ns or None, context=self.context)
         self.node.create_subscription(FaultStateMsg, topics.FAULT_STATE.name, self._on_state,
@@ -71,8 +72,13 @@ class GraphWatcher:
                 self.on_change(text)
 
     def _on_truth(self, msg):
+        change = StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp))
         with self._lock:
-            self._truth.append(StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp)))
+            if self._truth and change.onset <= self._truth[-1].onset:  # a restarted simulator: a new run
+                self._truth.clear()
+                self._decisions.clear()
+                self._signal.clear()
+            self._truth.append(change)
 
     def _on_chunk(self, msg):
         t0 = to_seconds(msg.header.stamp)
@@ -96,10 +102,10 @@ class GraphWatcher:
             return decisions
         return [d for i, d in enumerate(decisions) if i == 0 or decisions[i - 1].state != d.state]
 
-    def wait_decided_to_end(self, timeout: float, slack: float = 0.06) -> bool:
-        """Wait until a fault_state covers the end of the received signal (within ``slack`` s)."""
+    def wait_decided_to_end(self, timeout: float, stop, slack: float = 0.06) -> bool:
+        """Wait until a fault_state covers the end of the received signal (within ``slack`` s), or ``stop``."""
         deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        while time.monotonic() < deadline and not stop:
             with self._lock:
                 done = self._end is not None and self._decisions and \
                     self._decisions[-1].detected_at >= self._end - slack

@@ -1,8 +1,8 @@
 """Run several node processes side by side, with prefixed output and a clean stop.
 
 Used by ``bearing-graph`` (the ``make demo`` starter, for machines without
-``ros2 launch``) and by the test harness. Each child runs in its own session
-(process group) so that stopping it also stops anything it started; ``stop()``
+``ros2 launch``) and by the test harness. Each child runs in its own process
+group so that stopping it also stops anything it started; ``stop()``
 sends SIGINT, then SIGTERM, then SIGKILL, and always reaps. No rclpy here.
 """
 
@@ -22,13 +22,15 @@ from typing import TextIO
 
 @dataclass
 class Member:
-    """One child process of a group."""
+    """One child process of a group (the latest one, after restarts)."""
 
     name: str
     argv: list
+    env: dict
     process: subprocess.Popen
     lines: list = field(default_factory=list)  # everything it printed, for tests and post-mortems
     reader: threading.Thread | None = None
+    restarts: int = 0
 
     @property
     def returncode(self) -> int | None:
@@ -59,24 +61,45 @@ class ProcessGroup:
         self._lock = threading.Lock()
         self._width = 10
 
-    def start(self, name: str, argv: list, extra_env: dict | None = None) -> Member:
-        """Start ``argv`` as member ``name``; output is captured line by line."""
+    def start(self, name: str, argv: list, extra_env: dict | None = None, join: Member | None = None) -> Member:
+        """Start ``argv`` as member ``name``; output is captured line by line.
+
+        The child gets a process group of its own, or with ``join`` it enters that
+        member's (a signal to the group then reaches both, as a terminal's Ctrl-C
+        reaches every process started by ``ros2 launch``).
+        """
         env = dict(self.env)
         env.update(extra_env or {})
         env.setdefault("PYTHONUNBUFFERED", "1")
         env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
-        proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, text=True, bufsize=1,
-                                start_new_session=True, preexec_fn=_die_with_parent)
-        member = Member(name, list(argv), proc)
+        group = 0 if join is None else os.getpgid(join.process.pid)
+        member = Member(name, list(argv), env, self._spawn(argv, env, group))
         self._width = max(self._width, len(name))
-        member.reader = threading.Thread(target=self._pump, args=(member,), daemon=True)
-        member.reader.start()
+        self._read(member)
         self.members.append(member)
         return member
 
-    def _pump(self, member: Member) -> None:
-        for line in member.process.stdout:
+    def restart(self, member: Member) -> None:
+        """Start an exited member's command again, in a process group of its own; its
+        output continues in ``member.lines`` under the same name."""
+        member.process.wait()
+        member.reader.join(timeout=2.0)
+        member.process = self._spawn(member.argv, member.env, 0)
+        member.restarts += 1
+        self._read(member)
+
+    @staticmethod
+    def _spawn(argv: list, env: dict, process_group: int) -> subprocess.Popen:
+        return subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                stdin=subprocess.DEVNULL, text=True, bufsize=1,
+                                process_group=process_group, preexec_fn=_die_with_parent)
+
+    def _read(self, member: Member) -> None:
+        member.reader = threading.Thread(target=self._pump, args=(member, member.process), daemon=True)
+        member.reader.start()
+
+    def _pump(self, member: Member, process: subprocess.Popen) -> None:
+        for line in process.stdout:
             line = line.rstrip("\n")
             member.lines.append(line)
             if self.on_line is not None:

@@ -2,8 +2,10 @@
 
     ros2 launch bearing_bringup monitor.launch.py [params_file:=FILE] [namespace:=NS]
 
-The node list is bearing_bringup.graph.GRAPH, the same one `make demo` runs.
-When the simulator ends its scenario (repeat: false) the whole launch shuts down.
+The node list is bearing_bringup.graph.GRAPH, the same one `make demo` runs. When the
+simulator exits (its scenario ended, repeat: false) the whole launch shuts down; the
+observers and the diagnoser are respawned when they die, as bearing-graph restarts them
+(same delay; launch caps the respawns per node in total, not per minute).
 """
 
 import os
@@ -15,6 +17,14 @@ from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
 from bearing_bringup.graph import CONFIG_NAME, GRAPH
+from bearing_bringup.restart_policy import MAX_RESTARTS, RESTART_DELAY_S
+
+
+def lifecycle(spec) -> dict:
+    """What happens when the node's process ends."""
+    if spec.executable == "simulator":
+        return {"on_exit": Shutdown(reason="the simulator ended")}
+    return {"respawn": True, "respawn_delay": RESTART_DELAY_S, "respawn_max_retries": MAX_RESTARTS}
 
 
 def generate_launch_description():
@@ -29,7 +39,7 @@ def generate_launch_description():
             namespace=namespace,
             parameters=[params_file],
             output="screen",
-            on_exit=Shutdown() if spec.executable == "simulator" else None,
+            **lifecycle(spec),
         )
         for spec in GRAPH
     ]

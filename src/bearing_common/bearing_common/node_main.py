@@ -1,31 +1,66 @@
-"""The ``main()`` every node of the project shares: init, run, clean exit (rclpy imported lazily).
+"""The ``main()`` every node of the project shares: start, run, clean stop (rclpy imported lazily).
 
-A node stopped by Ctrl-C or SIGTERM exits 0 (rclpy raises ExternalShutdownException
-out of spin on SIGTERM); invalid parameters (ValueError) give one line on stderr and
-exit code 2 instead of a traceback.
+* SIGINT (Ctrl-C) or SIGTERM, once or repeated, ends the node with exit code 0 and
+  no traceback. rclpy's own signal handlers are off: they shut the context down under
+  the running code (KeyboardInterrupt, ExternalShutdownException or "context is not
+  valid" errors, depending on timing). Here a signal only sets a flag
+  (:class:`~bearing_common.stop_signals.StopSignals`) that the run loop polls.
+* The run ends (stop requested, or the node's own end, e.g. the simulator's scenario);
+  then the node's optional hook ``on_shutdown()`` is called while the context is still
+  valid — the place for a last message (the diagnoser's /diagnostics "stopped"; call
+  ``publisher.wait_for_all_acked(...)`` there if it must arrive) — and the node is
+  destroyed and rclpy shut down.
+* Invalid parameters (ValueError while building the node) give one line on stderr
+  and exit code 2.
+
+A node with a run loop of its own passes ``run(node, stop)``, which must return soon
+after ``stop`` becomes true (within ``POLL_S``, as the default spin does).
 """
 
+import signal
 import sys
+
+from .stop_signals import StopSignals
+
+POLL_S = 0.1  #: s, longest a stop request waits for the default spin to notice it
+
+
+def spin_until(node, stop) -> None:
+    """The default run: execute the node's callbacks until ``stop`` is true."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        while not stop:
+            executor.spin_once(timeout_sec=POLL_S)
+    finally:
+        executor.shutdown()
 
 
 def run_node_main(program: str, make_node, run=None, args=None) -> int:
-    """Initialise rclpy with ``args``, build ``make_node()``, ``run(node)`` (default: spin)."""
+    """Initialise rclpy with ``args``, build ``make_node()``, ``run(node, stop)`` (default:
+    :func:`spin_until`), call ``node.on_shutdown()`` if it exists; return the exit code."""
     import rclpy
-    from rclpy.executors import ExternalShutdownException
+    from rclpy.signals import SignalHandlerOptions
 
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = make_node()
-        (run or rclpy.spin)(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ValueError as exc:
-        print(f"{program}: {exc}", file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
+    with StopSignals() as stop:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        node = None
+        try:
+            try:
+                node = make_node()
+            except ValueError as exc:
+                print(f"{program}: {exc}", file=sys.stderr)  # noqa: T201 (the one-line error is the interface)
+                return 2
+            (run or spin_until)(node, stop)
+            if stop:
+                node.get_logger().info(f"{signal.Signals(stop.signal).name} received: stopping")
+            hook = getattr(node, "on_shutdown", None)
+            if hook is not None:
+                hook()
+        finally:
+            if node is not None:
+                node.destroy_node()
+            rclpy.try_shutdown()
     return 0

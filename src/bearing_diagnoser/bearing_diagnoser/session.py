@@ -25,12 +25,12 @@ from bearing_common import topics
 from bearing_common.bearings import load_bearing
 from bearing_common.states import FaultState
 from bearing_observer.chunk_stream import ChunkStream
+from bearing_observer.model_sets import SHIPPED
 
 from . import significance
 from .decision import STREAMS, Diagnoser
 from .decision_config import MODEL_SET_DEFAULTS, config_for
 from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL
-from .offline import MODEL_SETS
 from .state_tracker import Decision
 
 
@@ -93,7 +93,7 @@ class DiagnoserSession:
         significance.warm_up()
         for name, cfg in MODEL_SET_DEFAULTS.items():
             if cfg.method == "fold" and (self.values["model_set"] in ("", name)):
-                Diagnoser(cfg, name, load_bearing(self.values["bearing"]), MODEL_SETS[name][1]).thresholds()
+                Diagnoser(cfg, name, load_bearing(self.values["bearing"]), SHIPPED[name].sample_rate).thresholds()
 
     # -- configuration -----------------------------------------------------------------
     def configure(self, changed: dict) -> None:

@@ -60,7 +60,10 @@ class ChunkStream:
     def check(self, stamp: float, first_index: int, sample_rate: float, samples: np.ndarray) -> Verdict:
         """Check a chunk whose first sample is at ``stamp`` (s) with stream index ``first_index``."""
         n = len(samples)
-        restarted = first_index == 0 and self._last_stamp is not None  # producer restarted (or replay)
+        # producer restarted (or a replay began): back to index 0, or index and stamp both went back
+        # (a restarted producer whose first chunks this consumer missed)
+        restarted = self._last_stamp is not None and (first_index == 0 or (
+            stamp < self._last_stamp and self._next_index is not None and first_index < self._next_index))
         if restarted:
             self._next_index = None
             self._last_stamp = None

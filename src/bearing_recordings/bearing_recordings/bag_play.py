@@ -18,11 +18,11 @@ import time
 from collections.abc import Callable
 
 from bearing_common import topics
+from bearing_common.stop_signals import StopSignals
 
 from .bag_read import bag_namespace_hint, find_topic, iter_raw, open_bag
 from .bag_record import message_class
 from .bag_types import BagError
-from .stop_signals import StopSignals
 
 #: Wall-clock period (s) of /clock messages while waiting between recorded messages.
 CLOCK_PERIOD = 0.025

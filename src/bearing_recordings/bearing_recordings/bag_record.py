@@ -16,10 +16,10 @@ import time
 from collections.abc import Callable
 
 from bearing_common import topics
+from bearing_common.stop_signals import StopSignals
 
 from .bag_types import BagError
 from .bag_write import BagWriter
-from .stop_signals import StopSignals
 
 #: Recorded by default: the whole graph but ``/diagnostics`` (for humans; add it with ``--topics``).
 DEFAULT_RECORD_TOPICS = tuple(n for n in topics.GRAPH_TOPICS if n != topics.DIAGNOSTICS.name)

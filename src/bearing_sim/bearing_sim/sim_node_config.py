@@ -1,16 +1,28 @@
 """Parameters of the ``simulator`` node and how they become a simulation (no rclpy).
 
 The node (``node.py``) declares ``PARAMETERS``; ``build_run`` turns their values
-into a validated SimulationConfig and schedule. Topic names and QoS come from
-:mod:`bearing_common.topics`.
+into a validated SimulationConfig and schedule. ``rpm``, ``noise_density`` and
+``realtime`` can change while the node runs (applied at the next chunk, see
+:mod:`.sim_stream` and :mod:`.pacer`); the others are read-only. Topic names and QoS
+come from :mod:`bearing_common.topics`.
 """
 
+import math
 from dataclasses import dataclass
 
-from bearing_common.parameters import ParameterSpec, positive
+from bearing_common.parameters import ParameterSpec, non_negative, positive
 
 from .schedule import parse_schedule, scenario
-from .simulator import SimulationConfig
+from .simulator import MAX_RPM, SimulationConfig
+
+
+def _rpm_check(value):
+    return None if 0 < value <= MAX_RPM else f"must be in (0, {MAX_RPM:g}] rev/min, got {value:g}"
+
+
+def _noise_check(value):
+    return None if 0 <= value < math.inf else f"must be a finite number >= 0, got {value}"
+
 
 PARAMETERS = (
     ParameterSpec("scenario", "", "thesis case: normal, or, ir, or-ir, ir-or, or-normal, normal-or, "
@@ -18,12 +30,15 @@ PARAMETERS = (
     ParameterSpec("schedule", "", "segments 'fault:seconds,...' e.g. 'normal:0.1,outer_race:0.2' "
                   "(overrides scenario)"),
     ParameterSpec("segment_duration", 0.2, "seconds per scenario segment", positive),
-    ParameterSpec("rpm", 1800.0, "shaft speed (rev/min)", positive),
+    ParameterSpec("rpm", 1800.0, "shaft speed (rev/min); a change restarts the simulation at the new speed "
+                  "from the next chunk on, stamps continuing", _rpm_check, dynamic=True),
     ParameterSpec("sample_rate", 48000.0, "output sample rate of vibration/drive_end (Hz), 4 kHz-1 MHz", positive),
     ParameterSpec("chunk_duration", 0.01, "seconds of signal per published chunk", positive),
-    ParameterSpec("realtime", True, "pace publishing to wall-clock real time (false: as fast as possible)"),
+    ParameterSpec("realtime", True, "pace publishing to wall-clock real time (false: as fast as possible)",
+                  dynamic=True),
     ParameterSpec("repeat", False, "restart the scenario/schedule when it ends instead of exiting 0"),
-    ParameterSpec("noise_density", 0.0, "measurement noise density ((m/s^2)/sqrt(Hz)); 0 = off", lambda v: None if v >= 0 else "must be >= 0"),
+    ParameterSpec("noise_density", 0.0, "measurement noise density ((m/s^2)/sqrt(Hz)); 0 = off", _noise_check,
+                  dynamic=True),
     ParameterSpec("seed", 0, "random seed of the measurement noise"),
     ParameterSpec("variant", "default", "model variant (see bearing_sim.model_parameters)"),
     ParameterSpec("publish_clock", False, "publish /clock with the simulation time (for use_sim_time consumers)"),
@@ -33,7 +48,8 @@ PARAMETERS = (
                   "consumers are ready), at most subscriber_timeout s; empty = start at once",
                   lambda v: _check_wait_spec(v)),
     ParameterSpec("subscriber_timeout", 30.0, "seconds to wait for subscribers before starting anyway", positive),
-    ParameterSpec("linger", 1.0, "seconds to keep serving after the last chunk so subscribers receive it", lambda v: None if v >= 0 else "must be >= 0"),
+    ParameterSpec("linger", 1.0, "seconds to keep serving after the last chunk so subscribers receive it",
+                  non_negative),
 )
 
 def parse_wait_spec(spec: str) -> list:

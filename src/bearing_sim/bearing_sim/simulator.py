@@ -19,6 +19,7 @@ bit-identical whatever the chunk sizes passed to :meth:`Simulator.advance`.
 Memory is bounded (one 5 ms piece plus the FIR history).
 """
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -197,6 +198,11 @@ class Simulator:
         """Integrator counters: accepted steps, rejected steps, rhs evaluations, time (s)."""
         return {"steps": int(self._stats[STAT_STEPS]), "rejected": int(self._stats[STAT_REJECTS]),
                 "rhs_evals": int(self._stats[STAT_RHS]), "t": self._t}
+
+    def set_noise_density(self, noise_density):
+        """Change the measurement noise density ((m/s^2)/sqrt(Hz), >= 0) from the next sample on."""
+        self.config = dataclasses.replace(self.config, noise_density=noise_density)
+        self._noise_sigma = float(noise_density) * math.sqrt(self.sample_rate / 2.0)
 
     def state_at(self, t):
         """Fault state (int) scheduled at time(s) t; the last state continues after the end."""

@@ -1,0 +1,34 @@
+"""A node run by ``bearing_common.node_main`` with an ``on_shutdown`` hook (signal tests).
+
+Publishes a /diagnostics status "running" every 0.1 s, and "stopped" from its hook,
+as the diagnoser does when it is stopped.
+"""
+
+import sys
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from rclpy.duration import Duration
+from rclpy.node import Node
+
+from bearing_common import topics
+from bearing_common.node_main import run_node_main
+
+RUNNING, STOPPED = "running", "stopped"
+
+
+class HookProbe(Node):
+    def __init__(self):
+        super().__init__("hook_probe")
+        self.pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
+        self.create_timer(0.1, lambda: self.publish(RUNNING))
+
+    def publish(self, message: str) -> None:
+        self.pub.publish(DiagnosticArray(status=[DiagnosticStatus(name=self.get_name(), message=message)]))
+
+    def on_shutdown(self) -> None:
+        self.publish(STOPPED)
+        self.pub.wait_for_all_acked(Duration(seconds=2.0))
+
+
+if __name__ == "__main__":
+    sys.exit(run_node_main("hook_probe", HookProbe))
