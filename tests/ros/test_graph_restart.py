@@ -35,13 +35,6 @@ OUTPUT = {"simulator": topics.VIBRATION, "or_observer": topics.RESIDUAL_OUTER_RA
 STARTED = re.compile(r"\] (started|restarted) (\w+) \(pid (\d+)\)")
 STABLE_S = 3.0  # s of fault_state stamps that must follow the recovery, all correct
 RECOVERY_TIMEOUT_S = 60.0  # s after the restarted node's output is back
-DIAGNOSER_FALSE_STATES = (
-    "bearing_diagnoser: 1 s after an observer died the diagnoser decides from the other residual alone and "
-    "publishes INNER_RACE / UNKNOWN on outer-race data until the observer is back; then the resumed residuals "
-    "are dropped for about (outage - max_lag_s) by decision._Stream (tests/unit/test_diag_stream_outage.py), "
-    "seen as 1.5 to over 35 s more of false states")
-
-
 @dataclass
 class Arrivals:
     """Messages of one topic with their arrival time (monotonic s)."""
@@ -174,13 +167,6 @@ def recovery(request, tmp_path_factory) -> Recovery:
         graph.close()
 
 
-def xfail_for_the_decisive_observer(recovery, request):
-    """On outer-race data only the OR observer's outage shows the diagnoser's fault (the OR residual
-    alone still says OUTER_RACE while the IR observer is down)."""
-    if recovery.victim == "or_observer":
-        request.applymarker(pytest.mark.xfail(reason=DIAGNOSER_FALSE_STATES, strict=False))
-
-
 def test_killed_node_is_restarted_and_the_graph_keeps_running(recovery):
     """Only the killed node is restarted, after the delay; a correct state follows from its output
     (the fixture waited for it); Ctrl-C then stops every node cleanly."""
@@ -192,8 +178,7 @@ def test_killed_node_is_restarted_and_the_graph_keeps_running(recovery):
     assert recovery.exit_line.endswith("exit codes: simulator 0, or_observer 0, ir_observer 0, diagnoser 0")
 
 
-def test_fault_states_after_recovery_are_correct(recovery, request):
-    xfail_for_the_decisive_observer(recovery, request)
+def test_fault_states_after_recovery_are_correct(recovery):
     assert recovery.kill_to_state is not None, f"no correct fault_state within {RECOVERY_TIMEOUT_S} s"
     assert stamp(recovery.stable[-1]) - stamp(recovery.stable[0]) >= STABLE_S
     false = [(round(stamp(m), 3), FaultState(m.state).name) for m in recovery.stable
@@ -210,8 +195,7 @@ def test_a_late_participant_gets_the_current_state(recovery):
     assert published[stamp(newest)] == newest.state
 
 
-def test_no_false_fault_state_around_the_restart(recovery, request):
-    xfail_for_the_decisive_observer(recovery, request)
+def test_no_false_fault_state_around_the_restart(recovery):
     false = [(round(stamp(m), 3), FaultState(m.state).name) for _, m in recovery.states
              if m.state != FaultState.OUTER_RACE]
     assert not false, f"{len(false)} false states, first {false[:5]}"

@@ -9,7 +9,9 @@ as y = r + ŷ. Windows are decided as they become due by one of two front ends
   (one measurement; either observer may lag or die); each window's p-values become a label
   (:mod:`.spectral_labels`) over OUTER_RACE, INNER_RACE and BALL;
 * ``fold`` (simulator model sets): per-stream energy-envelope blocks, scored and labelled
-  by :class:`.fold_scores.FoldScorer`.
+  by :class:`.fold_scores.FoldScorer`; a stream that lags by more than ``max_lag_s`` is left
+  out if it never arrived (one observer deployed), and holds the decision (no window is
+  decided, the published state stands) if it went silent (a dead observer), until it is back.
 
 Both report the thesis' own blocks per observer stream and window — ``<h>_explained``
 (fraction of the measurement the train-driven model removes, 1 − ‖r‖²/‖y − ȳ‖²) and
@@ -258,8 +260,12 @@ class Diagnoser:
                 lead = max(s.n_blocks for s in self._streams.values())
                 if lead - b1 < lag_blocks:
                     break
+            # a stream never seen (one observer deployed) leaves its hypothesis out; a stream that went
+            # silent (a dead observer) holds the decision: deciding without it mistakes one fault for
+            # the other (the folding statistic needs both to explain the stronger one away)
+            outage = any(h in self._streams for h in missing)
             wins = {h: s.window(b0, b1) for h, s in ready.items()}
-            if all(win is not None and np.all(np.isfinite(win["env"])) for win in wins.values()):
+            if not outage and all(win is not None and np.all(np.isfinite(win["env"])) for win in wins.values()):
                 st = next(iter(ready.values()))
                 scores = self._scorer.scores(wins, {h: s.fault_hz for h, s in ready.items()},
                                              {h: s.has_model for h, s in ready.items()}, st.env.decimation, b0, fe)

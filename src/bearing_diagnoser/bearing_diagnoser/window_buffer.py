@@ -90,11 +90,12 @@ class StreamBlocks:
         return {k: v[i0:i1] for k, v in self._arrays.items()}
 
     def trim(self, keep_from_block: int) -> None:
-        """Forget blocks before ``keep_from_block``."""
+        """Forget blocks before ``keep_from_block`` (never more than the stream holds: a silent
+        stream keeps its place, so its next chunk is seen as the gap it is)."""
         self._consolidate()
         if self.first_block is None:
             return
-        cut = keep_from_block - self.first_block
+        cut = min(keep_from_block - self.first_block, self._arrays["y"].size)
         if cut > 0:
             for k in self.env.keys:
                 self._arrays[k] = self._arrays[k][cut:]
