@@ -34,7 +34,7 @@ from bearing_recordings.recording import InputError
 
 FS = 12000.0
 O, I = FaultState.OUTER_RACE, FaultState.INNER_RACE
-CASES = 200
+CASES = 300
 
 floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
 rates = st.one_of(st.sampled_from([0.0, -12000.0, math.nan, math.inf, 1e-9, 1e12, 12000.0, 48000.0]), floats)
@@ -45,6 +45,9 @@ def new_session():
     values = {p.name: p.default for p in PARAMETERS} | {"rpm": 1797.0}
     return DiagnoserSession(values, lambda level, text: logged.append((level, text))), logged
 
+
+#: Good input after the fuzzing: an outer-race fault the session must still diagnose.
+GOOD = burst_train(1.5, FS, 106.5, amplitude=3.0, jitter=0.01) + white_noise(1.5, FS, 4.5e-3)
 
 chunk = st.fixed_dictionaries({
     "hypothesis": st.sampled_from([O, I]),
@@ -80,16 +83,15 @@ def test_residual_callback_survives_anything_and_keeps_serving(chunks):
         for rep in reports:
             assert math.isfinite(rep.confidence) and math.isfinite(rep.stamp) and math.isfinite(rep.onset)
     rejected = sum(s.counts["rejected"] + s.counts["rejected by decision"] for s in session.streams.values())
-    assert rejected <= len([x for x in logged if x[0] == "warn"])  # every rejection said once (throttled by ROS)
+    assert (rejected > 0) == any(level == "warning" for level, _ in logged)  # each kind said (once per period)
     health = session.health(now=0.0)
     assert 0 <= health.level <= 3 and health.message
     # good input afterwards: a fresh stream (index 0, later stamp) is decided on
-    fault = burst_train(3.0, FS, 106.5, amplitude=3.0, jitter=0.01) + white_noise(3.0, FS, 4.5e-3)
     stamp0 = 2e12
     out = []
-    for i in range(0, fault.size, 120):
+    for i in range(0, GOOD.size, 1200):
         for h in (O, I):
-            y = fault[i:i + 120]
+            y = GOOD[i:i + 1200]
             out += session.on_residual(h, stamp0 + i / FS, i, FS, y, np.zeros(y.size), np.zeros(y.size), 107.0,
                                        "none", now=1.0)
     assert out and out[-1].state == FaultState.OUTER_RACE, (session.health(1.0).message, out[-1:] if out else None)
@@ -107,11 +109,15 @@ def test_shaft_speed_callback_takes_any_float(rad_s):
 # file loaders
 
 
-def _valid_mat() -> bytes:
+def _valid_mat(compressed: bool = False) -> bytes:
+    """A CWRU-style file, or (compressed) an MFPT-style struct as MATLAB's save writes it."""
     from scipy.io import savemat
     buf = io.BytesIO()
     y = white_noise(0.5, FS, 4.5e-3)
-    savemat(buf, {"X200_DE_time": y[:, None], "X200RPM": np.array([[1797]], dtype=np.uint16)})
+    if compressed:
+        savemat(buf, {"bearing": {"gs": y[:, None], "sr": FS, "rate": 25.0, "load": 0.0}}, do_compression=True)
+    else:
+        savemat(buf, {"X200_DE_time": y[:, None], "X200RPM": np.array([[1797]], dtype=np.uint16)})
     return buf.getvalue()
 
 
@@ -121,11 +127,11 @@ def _valid_npz() -> bytes:
     return buf.getvalue()
 
 
-VALID = {".mat": _valid_mat(), ".npz": _valid_npz()}
+VALID = {".mat": _valid_mat(), "compressed.mat": _valid_mat(compressed=True), ".npz": _valid_npz()}
 
 
 @settings(max_examples=CASES, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(suffix=st.sampled_from([".mat", ".npz"]), data=st.data())
+@given(suffix=st.sampled_from(sorted(VALID)), data=st.data())
 def test_recording_loaders_refuse_garbage_and_cut_files_with_one_line(tmp_path, suffix, data):
     valid = VALID[suffix]
     cut = data.draw(st.integers(0, len(valid) - 1))

@@ -27,7 +27,8 @@ import numpy as np
 
 from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import FaultState
-from bearing_observer.model_sets import NONE
+from bearing_common.units import MAX_SAMPLE_RATE
+from bearing_observer.model_sets import NONE, SHIPPED
 
 from .calibration import calibrate
 from .decision_config import DiagnoserConfig, config_for
@@ -139,8 +140,12 @@ class Diagnoser:
         h = FaultState(hypothesis)
         if h not in STREAMS:
             raise ValueError(f"unexpected hypothesis {h.label}; expected {[x.label for x in STREAMS]}")
-        if not (sample_rate and math.isfinite(sample_rate) and sample_rate > 0):
-            raise ValueError(f"sample_rate must be > 0, got {sample_rate}")
+        if not (sample_rate and math.isfinite(sample_rate) and 0 < sample_rate <= MAX_SAMPLE_RATE):
+            raise ValueError(f"sample_rate must be in (0, {MAX_SAMPLE_RATE:g}] Hz, got {sample_rate}")
+        shipped = SHIPPED.get(self.model_set)
+        if self.config.method == "fold" and shipped and not math.isclose(sample_rate, shipped.sample_rate):
+            raise ValueError(f"model set {self.model_set} decides {shipped.sample_rate:g} Hz streams, "
+                             f"not {sample_rate:g} Hz")
         if self._sample_rate is None:
             self._sample_rate = float(sample_rate)
         elif abs(sample_rate - self._sample_rate) > 1e-9 * self._sample_rate:

@@ -25,8 +25,6 @@ from bearing_msgs.msg import Residual, ShaftSpeed
 from .diagnoser_node_config import PARAMETERS
 from .session import DiagnoserSession, Health, StateReport
 
-WARN_PERIOD_S = 5.0
-
 
 class DiagnoserNode(Node):
     """Thin adapter: Residual chunks -> DiagnoserSession -> FaultState and /diagnostics."""
@@ -46,8 +44,8 @@ class DiagnoserNode(Node):
 
     def _log(self, level: str, text: str) -> None:
         logger = self.get_logger()
-        if level == "warn":
-            logger.warn(text, throttle_duration_sec=WARN_PERIOD_S)
+        if level == "warning":
+            logger.warning(text)
         else:
             logger.info(text)
 

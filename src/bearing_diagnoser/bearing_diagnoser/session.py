@@ -6,7 +6,8 @@ What the node does between ROS and the decision core:
   non-finite, wrong-rate, out-of-order chunks are rejected and counted);
 * restart rule: the decision core (:class:`.decision.Diagnoser`) restarts when a stream that
   already fed it restarts (a restarted observer or sensor: index back to 0, a new rate) —
-  its stream is then a new one — or when a parameter that shapes the decision changes;
+  its stream is then a new one —, when the residuals name another model set (observers
+  reconfigured), or when a parameter that shapes the decision changes;
 * time: a decision's stamp is the time of its window's end, from the chunk stamps
   (stamp of sample index 0 + index / rate), never from arrival;
 * health: the /diagnostics level and key-values — STALE when no residual arrived within
@@ -23,6 +24,7 @@ import numpy as np
 
 from bearing_common import topics
 from bearing_common.bearings import load_bearing
+from bearing_common.log_throttle import LogThrottle
 from bearing_common.states import FaultState
 from bearing_observer.chunk_stream import ChunkStream
 from bearing_observer.model_sets import SHIPPED
@@ -70,12 +72,14 @@ class DiagnoserSession:
         The node's parameter values (:data:`.diagnoser_node_config.PARAMETERS`), kept current
         by the node.
     log : callable(level, text)
-        Where to say what happened (``"info"``, ``"warn"``).
+        Where to say what happened (``"info"``, ``"warning"``); repeatable per-chunk messages
+        (rejections, bad speeds, "cannot decide") at most once per ``log_period`` s each.
     """
 
-    def __init__(self, values: dict, log):
+    def __init__(self, values: dict, log, log_period: float = 5.0):
         self.values = values
         self._log = log
+        self._log_repeatable = LogThrottle(log, log_period)
         self.streams = {h: ChunkStream(topics.residual_topic(h).name) for h in STREAMS}
         self.core: Diagnoser | None = None
         self._fed: set = set()  # streams that fed the current core
@@ -134,7 +138,7 @@ class DiagnoserSession:
         rpm = rad_s * 60.0 / (2.0 * math.pi)
         if not (math.isfinite(rpm) and 0.0 < rpm <= MAX_RPM):
             self.rejected_speeds += 1
-            self._log("warn", f"ignoring shaft speed {rad_s!r} rad/s")
+            self._log_repeatable("bad speed", "warning", f"ignoring shaft speed {rad_s!r} rad/s")
             return
         if self.shaft_rpm is None or abs(rpm / self.shaft_rpm - 1.0) > 1e-3:
             if self.shaft_rpm is None:
@@ -152,14 +156,16 @@ class DiagnoserSession:
         verdict = stream.check(stamp, first_index, sample_rate, r)
         if verdict.accepted and not (len(estimate) == len(train) == r.size):
             stream.counts["rejected"] += 1
-            self._log("warn", f"rejected residual chunk: {stream.name}: array lengths differ")
+            self._log_repeatable("rejected", "warning", f"rejected residual chunk: {stream.name}: array lengths differ")
             return []
         if not verdict.accepted:
-            self._log("warn", f"rejected residual chunk: {verdict.reason}")
+            self._log_repeatable("rejected", "warning", f"rejected residual chunk: {verdict.reason}")
             return []
-        if self.core is None or (verdict.restart and hypothesis in self._fed):
+        switched = self.core is not None and not self.values["model_set"] and model_set != self.core.model_set
+        if self.core is None or (verdict.restart and hypothesis in self._fed) or switched:
             if self.core is not None:
-                self._log("info", f"{verdict.reason}; restarting the decision")
+                why = f"residuals now from model set {model_set!r}" if switched else verdict.reason
+                self._log("info", f"{why}; restarting the decision")
             self.core = self._make_core(model_set, sample_rate)
             self._fed = set()
             self.time_offset = stamp - first_index / sample_rate
@@ -170,7 +176,7 @@ class DiagnoserSession:
         except ValueError as exc:
             stream.counts["rejected by decision"] += 1
             self.decision_problem = str(exc)
-            self._log("warn", f"cannot decide: {exc}")
+            self._log_repeatable("cannot decide", "warning", f"cannot decide: {exc}")
             return []
         self.decision_problem = ""
         return [self._report(d) for d in decisions if self._account(d)]

@@ -314,7 +314,7 @@ def load(path, sample_rate: float | None = None, fault_type: str | None = None) 
     try:
         model = HWModel.from_dict(d)
         model.bearing  # noqa: B018 (validates the recorded bearing)
-    except (KeyError, TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:  # wrong structure anywhere
         raise ModelFileError(f"model file {path} is corrupt: {type(exc).__name__}: {exc}") from None
     if sample_rate is not None and not math.isclose(model.sample_rate, float(sample_rate),
                                                    rel_tol=1e-9):

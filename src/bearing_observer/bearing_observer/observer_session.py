@@ -20,7 +20,6 @@ repeatable per-chunk messages (rejections, bad speeds, no model) at most once pe
 from __future__ import annotations
 
 import math
-import time
 import warnings
 from dataclasses import dataclass
 
@@ -28,6 +27,7 @@ import numpy as np
 
 from bearing_common import topics
 from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.log_throttle import LogThrottle
 from bearing_common.states import FaultState
 
 from .chunk_stream import ChunkStream
@@ -84,8 +84,7 @@ class ObserverSession:
         self.speed_tolerance = float(speed_tolerance)
         self.stream = ChunkStream(stream_name)
         self.log = log
-        self.log_period = float(log_period)
-        self._last_logged: dict[str, float] = {}
+        self._log_repeatable = LogThrottle(log, log_period)
         self.observer: FaultObserver | None = None
         self._built_for = None  # (set name, sample rate) of the observer
 
@@ -119,12 +118,6 @@ class ObserverSession:
             self._log_repeatable("bad speed", "warning", f"ignoring shaft speed {angular_velocity!r} rad/s")
         elif abs(rpm - self.rpm) > self.speed_tolerance * self.rpm:
             self._set_rpm(rpm)
-
-    def _log_repeatable(self, kind: str, level: str, text: str) -> None:
-        now = time.monotonic()
-        if now - self._last_logged.get(kind, -math.inf) >= self.log_period:
-            self._last_logged[kind] = now
-            self.log(level, text)
 
     def _set_rpm(self, rpm: float) -> None:
         self.rpm = rpm

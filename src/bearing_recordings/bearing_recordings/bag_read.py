@@ -28,9 +28,13 @@ from bearing_common import topics
 from bearing_common.stamps import to_seconds
 
 from .bag_types import CUSTOM_BEARING, CUSTOM_NAMESPACE, BagError, project_typestore
-from .recording import Recording
+from .recording import MAX_SAMPLES, Recording
 
 LOG = logging.getLogger(__name__)
+
+#: What the readers raise on a damaged file (a damaged length field makes them try to
+#: allocate gigabytes: MemoryError).
+_DAMAGED = (OSError, ValueError, KeyError, TypeError, EOFError, AssertionError, MemoryError, OverflowError)
 
 
 # ----------------------------------------------------------------------------------------
@@ -76,7 +80,7 @@ def open_bag(path, fallback_typestore: bool = True):
         reader.open()
     except errors as exc:
         raise BagError(f"{path}: not a readable rosbag2 recording: {_one_line(exc)}") from None
-    except (OSError, ValueError, KeyError, TypeError, AssertionError) as exc:
+    except _DAMAGED as exc:
         raise BagError(f"{path}: not a readable rosbag2 recording ({exc.__class__.__name__}: "
                        f"{_one_line(exc)})") from None
     try:
@@ -104,7 +108,7 @@ def iter_raw(reader, connections) -> Iterator[tuple]:
         for conn, t, raw in reader.messages(connections=connections):
             yield conn, t, raw
             count += 1
-    except _reader_errors() + (OSError, ValueError, KeyError, EOFError, AssertionError) as exc:
+    except _reader_errors() + _DAMAGED as exc:
         raise BagError(f"{reader.paths[0]}: bag storage is damaged after {count} messages: "
                        f"{_one_line(exc)}") from None
     except Exception as exc:  # mcap / sqlite3 raise their own error types on truncated files
@@ -341,6 +345,10 @@ def join_chunks(chunks: list) -> Stream:
         raise BagError(f"vibration chunks come from several sources ({', '.join(sorted(sources))})")
     ordered = sorted(chunks, key=lambda c: c.first_sample_index)
     first = ordered[0]
+    span = max(c.first_sample_index + c.samples.size for c in ordered) - first.first_sample_index
+    if span > MAX_SAMPLES:
+        raise BagError(f"vibration chunks span {span} samples ({span / rate:.0f} s at {rate:g} Hz), more than the "
+                       f"{MAX_SAMPLES} this tool reads at once: a damaged index or several recordings in one bag")
     parts, gaps, dups = [], [], 0
     nxt = first.first_sample_index
     for c in ordered:

@@ -22,7 +22,10 @@ a one-signal file gives its signal; anything else is an error listing the variab
 
 from __future__ import annotations
 
+import io
 import re
+import struct
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -38,13 +41,90 @@ _CWRU_RPM = re.compile(r"X(\d+)RPM")
 UNITS = {"g": STANDARD_GRAVITY, "m/s2": 1.0}
 
 
+#: MAT-file v5 element types (miMATRIX, miCOMPRESSED) and the byte size of numeric ones.
+_MI_MATRIX, _MI_COMPRESSED = 14, 15
+_ITEM_SIZE = {1: 1, 2: 1, 3: 2, 4: 2, 5: 4, 6: 4, 7: 4, 9: 8, 12: 8, 13: 8}
+#: mx classes: cell, struct; the numeric ones (double ... uint64).
+_MX_CELL, _MX_STRUCT, _MX_NUMERIC = 1, 2, range(6, 16)
+
+
+def _elements(data: bytes, start: int, end: int, order: str):
+    """(type, body offset, size) of each data element in ``data[start:end]``; ValueError when one overruns."""
+    pos = start
+    while pos < end:
+        if pos + 8 > end:
+            raise ValueError(f"element tag at byte {pos} cut short")
+        kind, size = struct.unpack_from(order + "II", data, pos)
+        if kind >> 16:  # small data element: type and size in one word, payload in the next
+            kind, size = kind & 0xFFFF, kind >> 16
+            if size > 4:
+                raise ValueError(f"small element at byte {pos} claims {size} bytes")
+            yield kind, pos + 4, size
+            pos += 8
+            continue
+        body = pos + 8
+        if body + size > end:
+            raise ValueError(f"element at byte {pos} claims {size} bytes, {end - body} left")
+        yield kind, body, size
+        pos = body + size + (0 if kind == _MI_COMPRESSED else -size % 8)  # compressed elements are not padded
+
+
+def _check_matrix(data: bytes, body: int, end: int, order: str, depth: int) -> None:
+    """An miMATRIX element as scipy reads it: flags, dimensions, name, then data that fits them."""
+    parts = _elements(data, body, end, order)
+    kind, at, size = next(parts, (None, 0, 0))
+    if kind != 6 or size != 8:
+        raise ValueError(f"array at byte {body} has no array flags")
+    mx_class = data[at] if order == "<" else data[at + 3]
+    kind, at, size = next(parts, (None, 0, 0))
+    if kind != 5 or size < 8 or size % 4:
+        raise ValueError(f"array at byte {body} has no dimensions")
+    count = int(np.prod(np.frombuffer(data, order.replace("<", "<i4").replace(">", ">i4"), size // 4, at),
+                        dtype=np.int64))
+    if count < 0:
+        raise ValueError(f"array at byte {body} has negative dimensions")
+    if next(parts, (None,))[0] != 1:
+        raise ValueError(f"array at byte {body} has no name")
+    rest = list(parts)
+    if mx_class in _MX_NUMERIC:
+        if not rest or rest[0][0] not in _ITEM_SIZE or rest[0][2] != count * _ITEM_SIZE[rest[0][0]]:
+            raise ValueError(f"array at byte {body}: data does not match its {count} elements")
+    elif mx_class in (_MX_CELL, _MX_STRUCT):
+        for kind, at, size in rest:
+            if kind == _MI_MATRIX and depth < 8:
+                _check_matrix(data, at, at + size, order, depth + 1)
+
+
+def _check_structure(data: bytes) -> None:
+    """Refuse a MAT-file v5 whose element sizes, dimensions or data disagree (ValueError).
+
+    scipy's reader trusts them and has crashed the process (segmentation fault) on a file
+    cut short and padded; such files are refused here with the reason instead.
+    """
+    order = "<" if data[126:128] == b"IM" else ">"
+    for kind, at, size in _elements(data, 128, len(data), order):
+        if kind == _MI_COMPRESSED:
+            inner = zlib.decompress(data[at:at + size])
+            for k, a, n in _elements(inner, 0, len(inner), order):
+                if k == _MI_MATRIX:
+                    _check_matrix(inner, a, a + n, order, 0)
+        elif kind == _MI_MATRIX:
+            _check_matrix(data, at, at + size, order, 0)
+
+
 def _read(path) -> dict:
     from scipy.io import loadmat
     try:
-        return loadmat(path)
-    except NotImplementedError:
-        raise InputError(f"{path}: MATLAB v7.3 (HDF5) files are not supported; save it with "
-                         "save(..., '-v7')") from None
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.__class__.__name__}: {exc})") from None
+    if data[:19] == b"MATLAB 7.3 MAT-file":
+        raise InputError(f"{path}: MATLAB v7.3 (HDF5) files are not supported; save it with save(..., '-v7')")
+    if not data.startswith(b"MATLAB 5.0 MAT-file") or len(data) < 128 or data[126:128] not in (b"IM", b"MI"):
+        raise InputError(f"{path}: not a MATLAB 5/7 MAT-file (no MAT-file header)")
+    try:
+        _check_structure(data)
+        return loadmat(io.BytesIO(data))
     except Exception as exc:  # scipy raises ValueError, TypeError, OSError, ... on damaged files
         raise InputError(f"{path}: not a readable MATLAB file ({exc.__class__.__name__}: "
                          f"{' '.join(str(exc).split())})") from None

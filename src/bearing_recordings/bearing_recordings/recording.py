@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bearing_common.units import MAX_SAMPLE_RATE
+
 #: Longest recording a loader accepts (samples): 1 hour at 100 kHz (2.9 GB as float64).
 MAX_SAMPLES = 360_000_000
 
@@ -74,6 +76,8 @@ def check_rate(rate, what: str = "sample rate") -> float:
         raise InputError(f"invalid {what} {rate!r}") from None
     if not math.isfinite(rate) or rate <= 0:
         raise InputError(f"{what} must be a positive number of Hz, got {rate:g}")
+    if rate > MAX_SAMPLE_RATE:
+        raise InputError(f"{what} {rate:g} Hz is not plausible (above {MAX_SAMPLE_RATE:g} Hz)")
     return rate
 
 
