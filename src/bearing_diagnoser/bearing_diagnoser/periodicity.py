@@ -23,6 +23,8 @@ from functools import lru_cache
 import numpy as np
 from scipy import signal, sparse
 
+from . import kernels
+
 #: Target envelope sample rate (Hz): enough for folding at BPFI (≈ 162 Hz) with 16 bins.
 ENVELOPE_RATE = 4000.0
 
@@ -87,30 +89,27 @@ class EnergyEnvelope:
     def push(self, y: np.ndarray, residual: np.ndarray | None = None,
              train: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """Feed measurement ``y`` (and optionally residual and train, same length)."""
+        return dict(zip(self.keys, self.blocks(y, residual, train)))
+
+    def blocks(self, y: np.ndarray, residual: np.ndarray | None = None,
+               train: np.ndarray | None = None) -> np.ndarray:
+        """As :meth:`push`, as one array of shape (len(:attr:`keys`), completed blocks)."""
         y = np.asarray(y, dtype=float)
         r = y if residual is None else np.asarray(residual, dtype=float)
         u = np.zeros_like(y) if train is None else np.asarray(train, dtype=float)
+        b = y
         if self._sos is not None:
-            b, self._zi = signal.sosfilt(self._sos, y, zi=self._zi)
-        else:
-            b = np.zeros(0)
+            b = np.empty_like(y)
+            kernels.sos_filter(self._sos, self._zi, y, b)
         c = self._carry
-        y = np.concatenate([c["y"], y])
-        r = np.concatenate([c["r"], r])
-        u = np.concatenate([c["u"], u])
+        if c["y"].size:
+            y, r, u, b = (np.concatenate([c[k], a]) for k, a in (("y", y), ("r", r), ("u", u), ("b", b)))
         d = self.decimation
         n = (y.size // d) * d
-        for k, arr in (("y", y), ("r", r), ("u", u)):
-            c[k] = arr[n:].copy()
-        y, r, u = (a[:n].reshape(-1, d) for a in (y, r, u))
-        out = {"y": y.sum(axis=1), "y2": (y * y).sum(axis=1), "r2": (r * r).sum(axis=1),
-               "ar": np.abs(r).sum(axis=1), "u": u.sum(axis=1)}
-        if self._sos is not None:
-            b = np.concatenate([c["b"], b])
-            c["b"] = b[n:].copy()
-            b2 = b[:n].reshape(-1, d) ** 2
-            out["env"] = b2.mean(axis=1)
-            out["b4"] = (b2 * b2).mean(axis=1)
+        for k, a in (("y", y), ("r", r), ("u", u), ("b", b)):
+            c[k] = a[n:].copy()
+        out = np.empty((len(self.keys), n // d))
+        kernels.block_sums(y, r, u, b, d, out)
         return out
 
 

@@ -26,7 +26,7 @@ from bearing_common.bearings import load_bearing
 from bearing_common.states import FaultState
 from bearing_observer.chunk_stream import ChunkStream
 
-from . import significance
+from . import kernels, significance
 from .decision import STREAMS, Diagnoser
 from .decision_config import MODEL_SET_DEFAULTS, config_for
 from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL
@@ -84,9 +84,11 @@ class DiagnoserSession:
         self.rejected_speeds = 0
 
     def warm_up(self) -> None:
-        """Compute now what the first windows would otherwise stall on: the p-value tables and
-        the folding thresholds of the simulator model sets (about 1 s each)."""
+        """Compute now what the first windows would otherwise stall on: the p-value tables, the
+        compiled kernels (numba: from its cache, or 15 s to compile after an install) and the
+        folding thresholds of the simulator model sets (about 1 s each)."""
         significance.warm_up()
+        kernels.warm_up()
         for name, cfg in MODEL_SET_DEFAULTS.items():
             if cfg.method == "fold" and (self.values["model_set"] in ("", name)):
                 Diagnoser(cfg, name, load_bearing(self.values["bearing"]), MODEL_SETS[name][1]).thresholds()
