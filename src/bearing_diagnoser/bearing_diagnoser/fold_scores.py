@@ -40,7 +40,7 @@ from bearing_common.states import FaultState
 from .bearing_lines import decoy_frequencies
 from .periodicity import (
     XCORR_LAG_S,
-    cfar_periodicity,
+    FoldBank,
     cfar_ses,
     explain_away,
     impact_phase_mask,
@@ -123,6 +123,7 @@ class FoldScorer:
         self.bearing = bearing
         self.thresholds = thresholds
         self._decoy_ratio: dict = {}
+        self._banks: dict = {}  # hypothesis -> ((fault Hz, window blocks, envelope rate), FoldBank)
 
     def decoys(self, hypothesis: FaultState, fault_hz: float) -> np.ndarray:
         """Decoy frequencies (Hz) for ``hypothesis`` at ``fault_hz``: fixed multiples of it
@@ -143,12 +144,16 @@ class FoldScorer:
         return tuple(k for k in range(1, s.ses_harmonics + 1)
                      if all(abs(k * f / (m * g) - 1.0) > 0.03 for g in other for m in range(1, 6)))
 
-    def _cfar(self, h: FaultState, env: np.ndarray, fe: float, b0: int, fault_hz: float):
+    def _cfar(self, h: FaultState, env: np.ndarray, fe: float, fault_hz: float):
         s = self.settings
         if s.statistic == "ses":
             return cfar_ses(env, fe, fault_hz, self.decoys(h, fault_hz), s.search, self.ses_harmonics(h))
-        grid = period_grid(fault_hz, s.window_s, s.bins, s.search)
-        return cfar_periodicity(env, fe, fault_hz, self.decoys(h, fault_hz), grid, b0, s.bins)
+        key = (fault_hz, env.size, fe)
+        bank = self._banks.get(h)
+        if bank is None or bank[0] != key:  # built when the speed (or the window) changes
+            grid = period_grid(fault_hz, s.window_s, s.bins, s.search)
+            bank = self._banks[h] = key, FoldBank(fault_hz, self.decoys(h, fault_hz), grid, env.size, fe, s.bins)
+        return bank[1].cfar(env)
 
     def scores(self, windows: dict, fault_hz: dict, has_model: dict, decimation: int, b0: int,
                fe: float) -> dict[str, float]:
@@ -163,7 +168,7 @@ class FoldScorer:
         scores: dict[str, float] = {}
         for h, win in windows.items():
             n = win["env"].size * decimation
-            ratio, _, best_hz = self._cfar(h, win["env"], fe, b0, fault_hz[h])
+            ratio, _, best_hz = self._cfar(h, win["env"], fe, fault_hz[h])
             scores[f"{h.label}_cfar"] = scores[f"{h.label}_cfar_raw"] = ratio
             scores[f"{h.label}_hz"] = best_hz
             sy, sy2 = win["y"].sum(), win["y2"].sum()
@@ -184,7 +189,7 @@ class FoldScorer:
             for h in windows:
                 if h != best:
                     env = explain_away(windows[h]["env"], mask)
-                    scores[f"{h.label}_cfar"] = self._cfar(h, env, fe, b0, fault_hz[h])[0]
+                    scores[f"{h.label}_cfar"] = self._cfar(h, env, fe, fault_hz[h])[0]
         return scores
 
     def label(self, scores: dict[str, float], hypotheses) -> tuple[FaultState, float]:

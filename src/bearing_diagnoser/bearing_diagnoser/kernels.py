@@ -4,7 +4,9 @@ Each replaces a chain of small NumPy calls that ran once per chunk or per window
 stream has 100 of each per second) by one pass over the data. Strict IEEE arithmetic (no
 fastmath), operations in NumPy's order: each kernel names the NumPy formulation it
 reproduces bit for bit — sums in NumPy's pairwise order (:func:`pairwise_sum`), the
-band-pass in ``scipy.signal.sosfilt``'s.
+band-pass in ``scipy.signal.sosfilt``'s. The one exception, said where it applies: the
+lagged products of :func:`train_correlation` (NumPy computes them with a BLAS dot, whose
+summation order depends on the BLAS build; the score is reported, never decided on).
 """
 
 from __future__ import annotations
@@ -143,9 +145,194 @@ def block_sums(y: np.ndarray, r: np.ndarray, u: np.ndarray, b: np.ndarray, d: in
             out[j, k] /= d
 
 
+@njit(cache=True)
+def _fold_profile(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, f: int, bins: int, smooth: int,
+                  prof: np.ndarray, smoothed: np.ndarray) -> float:
+    """Peakiness of ``env`` folded with row ``f`` of a folding table (see :func:`fold_peakiness`)."""
+    for b in range(bins):
+        prof[b] = 0.0
+    for t in range(env.size):
+        b = idx[f, t]
+        prof[b] += inv[f, b] * env[t]
+    top = -np.inf
+    for b in range(bins):
+        s = prof[b]
+        for k in range(1, smooth):
+            s += prof[(b + k) % bins]
+        smoothed[b] = s / smooth
+        top = max(top, smoothed[b])
+    mean = pairwise_sum(smoothed, 0, bins) / bins
+    return (top - mean) / mean if mean > 0 else 0.0
+
+
+@njit(cache=True)
+def fold_peakiness(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, bins: int, smooth: int) -> np.ndarray:
+    """Peakiness of the envelope folded at each frequency of a folding table.
+
+    Row ``f``: profile ``prof[b] = Σ_{t: idx[f, t] = b} inv[f, b] · env[t]`` (in order of t,
+    as the sparse matrix product did), smoothed circularly over ``smooth`` bins
+    (``sum(np.roll(prof, -k) for k in range(smooth)) / smooth``), peakiness
+    ``(max − mean) / mean`` (0 when the mean is not positive).
+
+    Parameters
+    ----------
+    env : ndarray, shape (n,)
+        Envelope ((m/s²)²).
+    idx : ndarray of int, shape (F, n)
+        Phase bin of each envelope sample per frequency.
+    inv : ndarray, shape (F, bins)
+        1 / (samples in the bin), 1 for an empty bin.
+
+    Returns
+    -------
+    ndarray, shape (F,)
+        Dimensionless.
+    """
+    prof, smoothed = np.empty(bins), np.empty(bins)
+    out = np.empty(idx.shape[0])
+    for f in range(idx.shape[0]):
+        out[f] = _fold_profile(env, idx, inv, f, bins, smooth, prof, smoothed)
+    return out
+
+
+@njit(cache=True)
+def median(x: np.ndarray) -> float:
+    """``np.median`` of a finite 1-D array: the middle order statistic, or the mean of the two
+    (NaN when empty)."""
+    if x.size == 0:
+        return np.nan
+    s = np.sort(x)
+    m = s.size // 2
+    return s[m] if s.size % 2 else (s[m - 1] + s[m]) / 2
+
+
+@njit(cache=True)
+def cfar_fold(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, n_grid: int, bins: int, smooth: int):
+    """CFAR ratio of the first frequency's best peakiness to the median of the others'.
+
+    The table's rows are frequencies × grid factors, row ``i·n_grid + g``; frequency 0 is the
+    fault, the rest decoys. Returns ``(ratio, best peakiness of frequency 0, grid index of
+    that best)``: ``best[0] / median(best[1:])`` (0 when the median is not positive), with
+    ``best`` the maximum over the grid (:func:`.periodicity.cfar_periodicity`).
+    """
+    prof, smoothed = np.empty(bins), np.empty(bins)
+    n_freqs = idx.shape[0] // n_grid
+    best = np.full(n_freqs, -np.inf)
+    arg = 0
+    for i in range(n_freqs):
+        for g in range(n_grid):
+            p = _fold_profile(env, idx, inv, i * n_grid + g, bins, smooth, prof, smoothed)
+            if p > best[i]:
+                best[i] = p
+                if i == 0:
+                    arg = g
+    ref = median(best[1:])
+    return (best[0] / ref if ref > 0 else 0.0), best[0], arg
+
+
+@njit(cache=True)
+def phase_bins(n: int, envelope_rate: float, freq: float, bins: int) -> np.ndarray:
+    """Phase bin ``min(floor(frac(t·freq)·bins), bins − 1)`` of envelope samples t = 0..n−1 / rate."""
+    out = np.empty(n, np.int64)
+    for i in range(n):
+        out[i] = min(np.int64((((i / envelope_rate) * freq) % 1.0) * bins), bins - 1)
+    return out
+
+
+@njit(cache=True)
+def impact_phase_mask(env: np.ndarray, envelope_rate: float, freq: float, bins: int, smooth: int,
+                      margin: int) -> np.ndarray:
+    """:func:`.periodicity.impact_phase_mask`: the samples in the peak's ``smooth`` bins ± ``margin``.
+
+    Profile = ``np.bincount(b, env) / max(np.bincount(b), 1)``, smoothed as in
+    :func:`fold_peakiness`; the peak is its first maximum.
+    """
+    b = phase_bins(env.size, envelope_rate, freq, bins)
+    sums = np.zeros(bins)
+    counts = np.zeros(bins, np.int64)
+    for t in range(env.size):
+        sums[b[t]] += env[t]
+        counts[b[t]] += 1
+    peak, top = 0, -np.inf
+    for k in range(bins):
+        s = sums[k] / max(counts[k], 1)
+        for j in range(1, smooth):
+            s += sums[(k + j) % bins] / max(counts[(k + j) % bins], 1)
+        s = s / smooth
+        if s > top:
+            peak, top = k, s
+    sel = np.zeros(bins, np.bool_)
+    for k in range(-margin, smooth + margin):
+        sel[(peak + k) % bins] = True
+    mask = np.empty(env.size, np.bool_)
+    for t in range(env.size):
+        mask[t] = sel[b[t]]
+    return mask
+
+
+@njit(cache=True)
+def explain_away(env: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Copy of ``env`` with the masked samples replaced by the median of the others (when
+    there are both)."""
+    out = env.copy()
+    kept = env[~mask]
+    if kept.size and kept.size < env.size:
+        m = median(kept)
+        for t in range(env.size):
+            if mask[t]:
+                out[t] = m
+    return out
+
+
+@njit(cache=True)
+def train_correlation(a: np.ndarray, u: np.ndarray, max_lag: int) -> float:
+    """Max Pearson correlation of ``a[k:]`` with ``u[:n − k]`` over lags k = 0..``max_lag``
+    (:func:`.periodicity.train_correlation`; the lagged products summed in sequence).
+
+    Lags where either variance is at most 1e-12 × the largest square (floored at 1e-300) are
+    skipped; without a valid lag, 0; a best found without lag 0 is floored at 0.
+    """
+    n = a.size
+    ca, ca2, cu, cu2 = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
+    top = 1e-300
+    for i in range(n):
+        ca[i + 1] = ca[i] + a[i]
+        ca2[i + 1] = ca2[i] + a[i] * a[i]
+        cu[i + 1] = cu[i] + u[i]
+        cu2[i + 1] = cu2[i] + u[i] * u[i]
+        top = max(top, a[i] * a[i], u[i] * u[i])
+    tiny = 1e-12 * top
+    best = -np.inf
+    found = False
+    valid0 = False
+    for k in range(max_lag + 1):
+        m = n - k
+        mx = (ca[n] - ca[k]) / m
+        mz = cu[n - k] / m
+        vx = (ca2[n] - ca2[k]) / m - mx * mx
+        vz = cu2[n - k] / m - mz * mz
+        if not (vx > tiny and vz > tiny):
+            continue
+        sxz = 0.0
+        for i in range(m):
+            sxz += a[i + k] * u[i]
+        c = (sxz / m - mx * mz) / np.sqrt(vx * vz)
+        best = max(best, c)
+        found = True
+        valid0 = valid0 or k == 0
+    if not found:
+        return 0.0
+    return best if valid0 else max(0.0, best)
+
+
 def warm_up() -> None:
     """Compile (first run after an install) or load from numba's cache every kernel, with the
     argument types the decision uses, so that no window waits for a compile."""
     z = np.zeros(16)
     sos_filter(np.array([[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]]), np.zeros((1, 2)), z, np.zeros(16))
     block_sums(z, z, z, z, 4, np.zeros((7, 4)))
+    idx = np.zeros((4, 16), np.int64)
+    fold_peakiness(z, idx, np.ones((4, 16)), 16, 2)
+    cfar_fold(z, idx, np.ones((4, 16)), 2, 16, 2)
+    explain_away(z, impact_phase_mask(z, 4000.0, 100.0, 16, 2, 1))
+    train_correlation(z, z, 2)
