@@ -26,6 +26,7 @@ import numpy as np
 from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import FaultState
 
+from . import kernels
 from .calibration import calibrate
 from .decision_config import NO_MODEL, DiagnoserConfig, config_for
 from .fold_scores import FoldScorer
@@ -255,7 +256,7 @@ class Diagnoser:
                 if lead - b1 < lag_blocks:
                     break
             wins = {h: s.window(b0, b1) for h, s in ready.items()}
-            if all(win is not None and np.all(np.isfinite(win["env"])) for win in wins.values()):
+            if all(win is not None and kernels.all_finite(win["env"]) for win in wins.values()):
                 st = next(iter(ready.values()))
                 scores = self._scorer.scores(wins, {h: s.fault_hz for h, s in ready.items()},
                                              {h: s.has_model for h, s in ready.items()}, st.env.decimation, b0, fe)

@@ -3,7 +3,7 @@
 Each replaces a chain of small NumPy calls that ran once per chunk or per window (a 48 kHz
 stream has 100 of each per second) by one pass over the data. Strict IEEE arithmetic (no
 fastmath), operations in NumPy's order: each kernel names the NumPy formulation it
-reproduces bit for bit — sums in NumPy's pairwise order (:func:`pairwise_sum`), the
+reproduces bit for bit — sums in NumPy's pairwise order (:func:`row_sum`), the
 band-pass in ``scipy.signal.sosfilt``'s. The one exception, said where it applies: the
 lagged products of :func:`train_correlation` (NumPy computes them with a BLAS dot, whose
 summation order depends on the BLAS build; the score is reported, never decided on).
@@ -19,46 +19,38 @@ _PW_BLOCK = 128
 
 
 @njit(cache=True)
-def _block_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """:func:`pairwise_sum` of at most 128 terms (one block, no recursion)."""
+def _block_sum(a: np.ndarray, row: int, lo: int, n: int) -> float:
+    """:func:`row_sum` of at most 128 terms of ``a[row]`` (one block, no halving)."""
     if n < 8:
         res = 0.0
         for i in range(n):
-            res += a[lo + i]
+            res += a[row, lo + i]
         return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    r0, r1, r2, r3 = a[row, lo], a[row, lo + 1], a[row, lo + 2], a[row, lo + 3]
+    r4, r5, r6, r7 = a[row, lo + 4], a[row, lo + 5], a[row, lo + 6], a[row, lo + 7]
     i = 8
     while i < n - n % 8:
         j = lo + i
-        r0 += a[j]
-        r1 += a[j + 1]
-        r2 += a[j + 2]
-        r3 += a[j + 3]
-        r4 += a[j + 4]
-        r5 += a[j + 5]
-        r6 += a[j + 6]
-        r7 += a[j + 7]
+        r0 += a[row, j]
+        r1 += a[row, j + 1]
+        r2 += a[row, j + 2]
+        r3 += a[row, j + 3]
+        r4 += a[row, j + 4]
+        r5 += a[row, j + 5]
+        r6 += a[row, j + 6]
+        r7 += a[row, j + 7]
         i += 8
     res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
     while i < n:
-        res += a[lo + i]
+        res += a[row, lo + i]
         i += 1
     return res
 
 
 @njit(cache=True)
-def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
-    """Sum of ``a[lo:lo + n]`` in the order of ``np.add.reduce`` on a contiguous axis.
-
-    NumPy's pairwise summation: below 8 terms in sequence; up to 128 with eight
-    interleaved accumulators combined as ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7)),
-    then the remainder in sequence; above, the two halves (the first a multiple of 8)
-    summed the same way and added. Bit-identical to ``a[lo:lo + n].sum()``. The halving
-    runs on an explicit stack (numba cannot cache a recursive function).
-    """
-    if n <= _PW_BLOCK:
-        return _block_sum(a, lo, n)
+def _halved_sum(a: np.ndarray, row: int, lo: int, n: int) -> float:
+    """:func:`row_sum` of more than 128 terms: NumPy's recursive halving, on an explicit stack
+    (numba cannot cache a recursive function)."""
     los = np.empty(64, np.int64)  # 2**64 terms would not fit any array
     ns = np.empty(64, np.int64)
     left = np.empty(64)
@@ -71,7 +63,7 @@ def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
             sp += 1
             los[sp], ns[sp], stage[sp] = los[sp - 1], half - half % 8, 0
             continue
-        v = _block_sum(a, los[sp], ns[sp])
+        v = _block_sum(a, row, los[sp], ns[sp])
         while sp > 0:  # hand v to the parents: a left half waits for its right, a right half completes
             sp -= 1
             if stage[sp] == 1:
@@ -84,6 +76,23 @@ def pairwise_sum(a: np.ndarray, lo: int, n: int) -> float:
             v = left[sp] + v
         if sp == 0 and stage[0] != 1:
             return v
+
+
+@njit(cache=True)
+def row_sum(a: np.ndarray, row: int, lo: int, n: int) -> float:
+    """Sum of ``a[row, lo:lo + n]`` in the order of ``np.add.reduce`` on a contiguous axis.
+
+    NumPy's pairwise summation: below 8 terms in sequence; up to 128 with eight
+    interleaved accumulators combined as ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7)),
+    then the remainder in sequence; above, the two halves (the first a multiple of 8)
+    summed the same way and added. Bit-identical to ``a[row, lo:lo + n].sum()``. Rows are
+    addressed by index because a view per call would cost more than a short sum; loops of
+    many short sums call :func:`_block_sum` themselves (calling this function there kept
+    numba from optimising the loop: 3x slower).
+    """
+    if n <= _PW_BLOCK:
+        return _block_sum(a, row, lo, n)
+    return _halved_sum(a, row, lo, n)
 
 
 @njit(cache=True)
@@ -128,6 +137,7 @@ def block_sums(y: np.ndarray, r: np.ndarray, u: np.ndarray, b: np.ndarray, d: in
     """
     band = out.shape[0] - 5
     t = np.empty((7, d))
+    short = d <= _PW_BLOCK
     for k in range(out.shape[1]):
         o = k * d
         for i in range(d):
@@ -140,28 +150,50 @@ def block_sums(y: np.ndarray, r: np.ndarray, u: np.ndarray, b: np.ndarray, d: in
             t[5, i] = abs(r[o + i])
             t[6, i] = u[o + i]
         for j in range(out.shape[0]):
-            out[j, k] = pairwise_sum(t[j + 2 - band], 0, d)
+            out[j, k] = _block_sum(t, j + 2 - band, 0, d) if short else _halved_sum(t, j + 2 - band, 0, d)
         for j in range(band):
             out[j, k] /= d
 
 
 @njit(cache=True)
-def _fold_profile(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, f: int, bins: int, smooth: int,
-                  prof: np.ndarray, smoothed: np.ndarray) -> float:
-    """Peakiness of ``env`` folded with row ``f`` of a folding table (see :func:`fold_peakiness`)."""
+def _fold_profile(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, f: int, bins: int, prof: np.ndarray) -> None:
+    """Folded profile of ``env`` with row ``f`` of a folding table into ``prof`` (see
+    :func:`fold_peakiness`). A bin's running sum stays in a register while consecutive
+    samples fall in it: the same additions in the same order as bin by bin."""
     for b in range(bins):
         prof[b] = 0.0
+    if env.size == 0:
+        return
+    cur = idx[f, 0]
+    acc = 0.0
     for t in range(env.size):
         b = idx[f, t]
-        prof[b] += inv[f, b] * env[t]
+        if b != cur:
+            prof[cur] = acc
+            cur = b
+            acc = prof[b]
+        acc += inv[f, b] * env[t]
+    prof[cur] = acc
+
+
+@njit(cache=True)
+def _peakiness(prof: np.ndarray, bins: int, smooth: int, smoothed: np.ndarray) -> float:
+    """Peakiness of a profile smoothed circularly over ``smooth`` bins (see :func:`fold_peakiness`;
+    the neighbour index wraps without a modulo, whose integer division cost as much as the fold)."""
     top = -np.inf
     for b in range(bins):
         s = prof[b]
-        for k in range(1, smooth):
-            s += prof[(b + k) % bins]
-        smoothed[b] = s / smooth
-        top = max(top, smoothed[b])
-    mean = pairwise_sum(smoothed, 0, bins) / bins
+        j = b
+        for _ in range(1, smooth):
+            j += 1
+            if j == bins:
+                j = 0
+            s += prof[j]
+        v = s / smooth
+        smoothed[0, b] = v
+        if v > top:
+            top = v
+    mean = (_block_sum(smoothed, 0, 0, bins) if bins <= _PW_BLOCK else _halved_sum(smoothed, 0, 0, bins)) / bins
     return (top - mean) / mean if mean > 0 else 0.0
 
 
@@ -188,10 +220,11 @@ def fold_peakiness(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, bins: int,
     ndarray, shape (F,)
         Dimensionless.
     """
-    prof, smoothed = np.empty(bins), np.empty(bins)
+    prof, smoothed = np.empty(bins), np.empty((1, bins))
     out = np.empty(idx.shape[0])
     for f in range(idx.shape[0]):
-        out[f] = _fold_profile(env, idx, inv, f, bins, smooth, prof, smoothed)
+        _fold_profile(env, idx, inv, f, bins, prof)
+        out[f] = _peakiness(prof, bins, smooth, smoothed)
     return out
 
 
@@ -215,19 +248,45 @@ def cfar_fold(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, n_grid: int, bi
     that best)``: ``best[0] / median(best[1:])`` (0 when the median is not positive), with
     ``best`` the maximum over the grid (:func:`.periodicity.cfar_periodicity`).
     """
-    prof, smoothed = np.empty(bins), np.empty(bins)
+    prof, smoothed = np.empty(bins), np.empty((1, bins))
     n_freqs = idx.shape[0] // n_grid
     best = np.full(n_freqs, -np.inf)
     arg = 0
     for i in range(n_freqs):
         for g in range(n_grid):
-            p = _fold_profile(env, idx, inv, i * n_grid + g, bins, smooth, prof, smoothed)
+            _fold_profile(env, idx, inv, i * n_grid + g, bins, prof)
+            p = _peakiness(prof, bins, smooth, smoothed)
             if p > best[i]:
                 best[i] = p
                 if i == 0:
                     arg = g
     ref = median(best[1:])
     return (best[0] / ref if ref > 0 else 0.0), best[0], arg
+
+
+@njit(cache=True)
+def window_sums(env: np.ndarray, b4: np.ndarray, y: np.ndarray, y2: np.ndarray, r2: np.ndarray, q: int):
+    """The sums a fold window's scores need, each ``x.sum()`` bit for bit (:func:`row_sum`).
+
+    Returns ``(Σy, Σy², Σr², Σenv, Σenv[:-q], Σenv[-q:], Σb4)`` over the window's blocks,
+    ``q`` >= 1 the newest blocks (all of them when q >= the window; the older part is then
+    empty, sum 0).
+    """
+    w = env.size
+    e = env.reshape(1, w)
+    tail = min(q, w)
+    return (row_sum(y.reshape(1, w), 0, 0, w), row_sum(y2.reshape(1, w), 0, 0, w),
+            row_sum(r2.reshape(1, w), 0, 0, w), row_sum(e, 0, 0, w), row_sum(e, 0, 0, w - tail),
+            row_sum(e, 0, w - tail, tail), row_sum(b4.reshape(1, w), 0, 0, w))
+
+
+@njit(cache=True)
+def all_finite(x: np.ndarray) -> bool:
+    """``np.all(np.isfinite(x))``."""
+    for v in x:
+        if not np.isfinite(v):
+            return False
+    return True
 
 
 @njit(cache=True)
@@ -327,12 +386,17 @@ def train_correlation(a: np.ndarray, u: np.ndarray, max_lag: int) -> float:
 
 def warm_up() -> None:
     """Compile (first run after an install) or load from numba's cache every kernel, with the
-    argument types the decision uses, so that no window waits for a compile."""
+    argument types the decision uses (folding tables are read-only uint8 bins and float
+    weights), so that no window waits for a compile."""
     z = np.zeros(16)
     sos_filter(np.array([[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]]), np.zeros((1, 2)), z, np.zeros(16))
     block_sums(z, z, z, z, 4, np.zeros((7, 4)))
-    idx = np.zeros((4, 16), np.int64)
-    fold_peakiness(z, idx, np.ones((4, 16)), 16, 2)
-    cfar_fold(z, idx, np.ones((4, 16)), 2, 16, 2)
+    idx, inv = np.zeros((4, 16), np.uint8), np.ones((4, 16))
+    idx.setflags(write=False)
+    inv.setflags(write=False)
+    fold_peakiness(z, idx, inv, 16, 2)
+    cfar_fold(z, idx, inv, 2, 16, 2)
     explain_away(z, impact_phase_mask(z, 4000.0, 100.0, 16, 2, 1))
     train_correlation(z, z, 2)
+    window_sums(z, z, z, z, z, 4)
+    all_finite(z)

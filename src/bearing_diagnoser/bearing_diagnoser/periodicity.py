@@ -75,7 +75,7 @@ class EnergyEnvelope:
             self._sos = signal.butter(4, [lo, hi], btype="bandpass", fs=sample_rate, output="sos")
             self._zi = np.zeros((self._sos.shape[0], 2))
         self.keys = (("env", "b4") if self._sos is not None else ()) + self.SUMS
-        self._carry: dict[str, np.ndarray] = {k: np.zeros(0) for k in ("b", "y", "r", "u")}
+        self._carry: tuple | None = None  # (y, r, u, b) of a partial block, if any
 
     @property
     def envelope_rate(self) -> float:
@@ -101,13 +101,11 @@ class EnergyEnvelope:
         if self._sos is not None:
             b = np.empty_like(y)
             kernels.sos_filter(self._sos, self._zi, y, b)
-        c = self._carry
-        if c["y"].size:
-            y, r, u, b = (np.concatenate([c[k], a]) for k, a in (("y", y), ("r", r), ("u", u), ("b", b)))
+        if self._carry is not None:
+            y, r, u, b = (np.concatenate(p) for p in zip(self._carry, (y, r, u, b)))
         d = self.decimation
         n = (y.size // d) * d
-        for k, a in (("y", y), ("r", r), ("u", u), ("b", b)):
-            c[k] = a[n:].copy()
+        self._carry = (y[n:].copy(), r[n:].copy(), u[n:].copy(), b[n:].copy()) if n < y.size else None
         out = np.empty((len(self.keys), n // d))
         kernels.block_sums(y, r, u, b, d, out)
         return out
@@ -132,8 +130,8 @@ def _fold_table(freqs: tuple, n: int, envelope_rate: float, bins: int) -> tuple[
     """Phase bins of ``n`` envelope samples at each frequency: the folding, precomputed.
 
     Returns ``idx`` (len(freqs), n), the bin floor(frac(t·f)·bins) of sample t (s from the
-    window's first sample) at frequency f (Hz), and ``inv`` (len(freqs), bins), 1 / the
-    samples per bin (1 for an empty bin). Phase is measured from the window's first sample:
+    window's first sample) at frequency f (Hz), uint8 up to 256 bins; and ``inv``
+    (len(freqs), bins), 1 / the samples per bin (1 for an empty bin). Phase is measured from the window's first sample:
     the maximum over bins (the phase search) does not depend on the origin, and the table
     serves window after window while the frequencies stay the same.
     """
@@ -142,6 +140,7 @@ def _fold_table(freqs: tuple, n: int, envelope_rate: float, bins: int) -> tuple[
     idx = np.minimum(((np.outer(f, t) % 1.0) * bins).astype(np.int64), bins - 1)
     rows = (idx + (np.arange(f.size) * bins)[:, None]).ravel()
     inv = 1.0 / np.maximum(np.bincount(rows, minlength=f.size * bins).astype(float), 1.0).reshape(f.size, bins)
+    idx = idx.astype(np.uint8 if bins <= 256 else np.int64)  # one byte a sample: the table stays in cache
     idx.setflags(write=False)
     inv.setflags(write=False)
     return idx, inv
