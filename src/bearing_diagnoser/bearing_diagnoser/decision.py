@@ -157,7 +157,8 @@ class Diagnoser:
         st.fault_hz = float(fault_frequency)
         st.has_model = st.has_model or (estimate is not None and self.model_set != NO_MODEL)
         y = r + e
-        st.push(int(first_sample_index), y, r, u)
+        if self.config.method == "fold" or self.model_set != NO_MODEL:  # else the blocks are never read
+            st.push(int(first_sample_index), y, r, u)
         if self.config.method == "spectral":
             return self._record(self._run_spectral(int(first_sample_index), y))
         return self._record(self._run_fold())

@@ -30,6 +30,14 @@ N_MED = 50
 
 
 @lru_cache(maxsize=32)
+def hanning(n: int) -> np.ndarray:
+    """``np.hanning(n)``, read-only and cached (the speed and band buffers reuse a few lengths)."""
+    w = np.hanning(n)
+    w.setflags(write=False)
+    return w
+
+
+@lru_cache(maxsize=32)
 def hann(n: int) -> np.ndarray:
     """Hann taper of ``n`` points without its zero end points (read-only, cached)."""
     w = np.hanning(n + 2)[1:-1]
