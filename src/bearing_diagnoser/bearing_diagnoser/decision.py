@@ -69,6 +69,7 @@ class Diagnoser:
         self._engine: SpectralEngine | None = None
         self._scorer: FoldScorer | None = None
         self._next_window = 0  # fold: index of the next window to decide
+        self._geometry: tuple[float, int, int] | None = None  # fold: see _fold_geometry
         self._tracker = StateTracker(self.config.k_of_n, self.config.normal_k_of_n, self._unknown_rule())
         self.history: list[Decision] = []
         self.keep_history = True
@@ -231,11 +232,13 @@ class Diagnoser:
         return out
 
     # -- fold front end ----------------------------------------------------------------
-    def _fold_geometry(self):
-        st = next(iter(self._streams.values()))
-        fe = st.env.envelope_rate
-        fold = self.config.fold
-        return fe, max(1, int(round(fold.window_s * fe))), max(1, int(round(fold.hop_s * fe)))
+    def _fold_geometry(self) -> tuple[float, int, int]:
+        """(envelope rate Hz, window and hop in blocks), the same for every stream (one sample rate)."""
+        if self._geometry is None:
+            fe = next(iter(self._streams.values())).env.envelope_rate
+            fold = self.config.fold
+            self._geometry = fe, max(1, int(round(fold.window_s * fe))), max(1, int(round(fold.hop_s * fe)))
+        return self._geometry
 
     def _run_fold(self, final: bool = False) -> list[Decision]:
         out: list[Decision] = []

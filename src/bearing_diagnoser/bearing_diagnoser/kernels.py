@@ -92,6 +92,10 @@ def row_sum(a: np.ndarray, row: int, lo: int, n: int) -> float:
     """
     if n <= _PW_BLOCK:
         return _block_sum(a, row, lo, n)
+    half = n // 2
+    half -= half % 8
+    if n - half <= _PW_BLOCK:  # two blocks (up to 264 terms: a fold window) without the stack
+        return _block_sum(a, row, lo, half) + _block_sum(a, row, lo + half, n - half)
     return _halved_sum(a, row, lo, n)
 
 
@@ -156,75 +160,57 @@ def block_sums(y: np.ndarray, r: np.ndarray, u: np.ndarray, b: np.ndarray, d: in
 
 
 @njit(cache=True)
-def _fold_profile(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, f: int, bins: int, prof: np.ndarray) -> None:
-    """Folded profile of ``env`` with row ``f`` of a folding table into ``prof`` (see
-    :func:`fold_peakiness`). A bin's running sum stays in a register while consecutive
-    samples fall in it: the same additions in the same order as bin by bin."""
-    for b in range(bins):
-        prof[b] = 0.0
-    if env.size == 0:
-        return
-    cur = idx[f, 0]
-    acc = 0.0
-    for t in range(env.size):
-        b = idx[f, t]
-        if b != cur:
-            prof[cur] = acc
-            cur = b
-            acc = prof[b]
-        acc += inv[f, b] * env[t]
-    prof[cur] = acc
-
-
-@njit(cache=True)
-def _peakiness(prof: np.ndarray, bins: int, smooth: int, smoothed: np.ndarray) -> float:
-    """Peakiness of a profile smoothed circularly over ``smooth`` bins (see :func:`fold_peakiness`;
-    the neighbour index wraps without a modulo, whose integer division cost as much as the fold)."""
-    top = -np.inf
-    for b in range(bins):
-        s = prof[b]
-        j = b
-        for _ in range(1, smooth):
-            j += 1
-            if j == bins:
-                j = 0
-            s += prof[j]
-        v = s / smooth
-        smoothed[0, b] = v
-        if v > top:
-            top = v
-    mean = (_block_sum(smoothed, 0, 0, bins) if bins <= _PW_BLOCK else _halved_sum(smoothed, 0, 0, bins)) / bins
-    return (top - mean) / mean if mean > 0 else 0.0
-
-
-@njit(cache=True)
-def fold_peakiness(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, bins: int, smooth: int) -> np.ndarray:
+def fold_peakiness(env: np.ndarray, offsets: np.ndarray, inv: np.ndarray, bins: int, smooth: int) -> np.ndarray:
     """Peakiness of the envelope folded at each frequency of a folding table.
 
-    Row ``f``: profile ``prof[b] = Σ_{t: idx[f, t] = b} inv[f, b] · env[t]`` (in order of t,
-    as the sparse matrix product did), smoothed circularly over ``smooth`` bins
+    Row ``f``: profile ``prof[f, b] = Σ_{t in bin b} inv[f, b] · env[t]``, summed in order of
+    t (as the sparse matrix product did), smoothed circularly over ``smooth`` bins
     (``sum(np.roll(prof, -k) for k in range(smooth)) / smooth``), peakiness
-    ``(max − mean) / mean`` (0 when the mean is not positive).
+    ``(max − mean) / mean`` (0 when the mean is not positive). Samples run in the outer
+    loop and frequencies in the inner one: consecutive additions go to different bins, so
+    none waits for the previous one (a quarter faster than frequency by frequency); the
+    neighbour index wraps without a modulo (an integer division per bin cost as much as
+    the fold).
 
     Parameters
     ----------
     env : ndarray, shape (n,)
         Envelope ((m/s²)²).
-    idx : ndarray of int, shape (F, n)
-        Phase bin of each envelope sample per frequency.
-    inv : ndarray, shape (F, bins)
-        1 / (samples in the bin), 1 for an empty bin.
+    offsets : ndarray of int, shape (n, F)
+        ``f · bins + (phase bin of sample t at frequency f)``.
+    inv : ndarray, shape (F · bins,)
+        1 / (samples in the bin), 1 for an empty bin, at the same offsets.
 
     Returns
     -------
     ndarray, shape (F,)
         Dimensionless.
     """
-    prof, smoothed = np.empty(bins), np.empty((1, bins))
-    out = np.empty(idx.shape[0])
-    for f in range(idx.shape[0]):
-        _fold_profile(env, idx, inv, f, bins, prof)
-        out[f] = _peakiness(prof, bins, smooth, smoothed)
+    n_rows = offsets.shape[1]
+    prof = np.zeros(n_rows * bins)
+    for t in range(env.size):
+        e = env[t]
+        for f in range(n_rows):
+            o = offsets[t, f]
+            prof[o] += inv[o] * e
+    out = np.empty(n_rows)
+    smoothed = np.empty((1, bins))
+    for f in range(n_rows):
+        top = -np.inf
+        for b in range(bins):
+            s = prof[f * bins + b]
+            j = b
+            for _ in range(1, smooth):
+                j += 1
+                if j == bins:
+                    j = 0
+                s += prof[f * bins + j]
+            v = s / smooth
+            smoothed[0, b] = v
+            if v > top:
+                top = v
+        mean = (_block_sum(smoothed, 0, 0, bins) if bins <= _PW_BLOCK else _halved_sum(smoothed, 0, 0, bins)) / bins
+        out[f] = (top - mean) / mean if mean > 0 else 0.0
     return out
 
 
@@ -240,7 +226,7 @@ def median(x: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def cfar_fold(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, n_grid: int, bins: int, smooth: int):
+def cfar_fold(env: np.ndarray, offsets: np.ndarray, inv: np.ndarray, n_grid: int, bins: int, smooth: int):
     """CFAR ratio of the first frequency's best peakiness to the median of the others'.
 
     The table's rows are frequencies × grid factors, row ``i·n_grid + g``; frequency 0 is the
@@ -248,16 +234,15 @@ def cfar_fold(env: np.ndarray, idx: np.ndarray, inv: np.ndarray, n_grid: int, bi
     that best)``: ``best[0] / median(best[1:])`` (0 when the median is not positive), with
     ``best`` the maximum over the grid (:func:`.periodicity.cfar_periodicity`).
     """
-    prof, smoothed = np.empty(bins), np.empty((1, bins))
-    n_freqs = idx.shape[0] // n_grid
-    best = np.full(n_freqs, -np.inf)
+    pk = fold_peakiness(env, offsets, inv, bins, smooth)
+    n_freqs = pk.size // n_grid
+    best = np.empty(n_freqs)
     arg = 0
     for i in range(n_freqs):
-        for g in range(n_grid):
-            _fold_profile(env, idx, inv, i * n_grid + g, bins, prof)
-            p = _peakiness(prof, bins, smooth, smoothed)
-            if p > best[i]:
-                best[i] = p
+        best[i] = pk[i * n_grid]
+        for g in range(1, n_grid):
+            if pk[i * n_grid + g] > best[i]:
+                best[i] = pk[i * n_grid + g]
                 if i == 0:
                     arg = g
     ref = median(best[1:])
@@ -386,16 +371,17 @@ def train_correlation(a: np.ndarray, u: np.ndarray, max_lag: int) -> float:
 
 def warm_up() -> None:
     """Compile (first run after an install) or load from numba's cache every kernel, with the
-    argument types the decision uses (folding tables are read-only uint8 bins and float
+    argument types the decision uses (folding tables are read-only uint16 offsets and float
     weights), so that no window waits for a compile."""
     z = np.zeros(16)
     sos_filter(np.array([[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]]), np.zeros((1, 2)), z, np.zeros(16))
     block_sums(z, z, z, z, 4, np.zeros((7, 4)))
-    idx, inv = np.zeros((4, 16), np.uint8), np.ones((4, 16))
-    idx.setflags(write=False)
+    block_sums(z, z, z, z, 4, np.zeros((7, 8))[:, 4:])  # into a stream's block store (strided)
+    offsets, inv = np.zeros((16, 4), np.uint16), np.ones(64)
+    offsets.setflags(write=False)
     inv.setflags(write=False)
-    fold_peakiness(z, idx, inv, 16, 2)
-    cfar_fold(z, idx, inv, 2, 16, 2)
+    fold_peakiness(z, offsets, inv, 16, 2)
+    cfar_fold(z, offsets, inv, 2, 16, 2)
     explain_away(z, impact_phase_mask(z, 4000.0, 100.0, 16, 2, 1))
     train_correlation(z, z, 2)
     window_sums(z, z, z, z, z, 4)

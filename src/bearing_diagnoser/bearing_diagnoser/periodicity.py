@@ -91,9 +91,14 @@ class EnergyEnvelope:
         """Feed measurement ``y`` (and optionally residual and train, same length)."""
         return dict(zip(self.keys, self.blocks(y, residual, train)))
 
+    def completed(self, n: int) -> int:
+        """How many blocks ``n`` more samples complete."""
+        return (n + (0 if self._carry is None else self._carry[0].size)) // self.decimation
+
     def blocks(self, y: np.ndarray, residual: np.ndarray | None = None,
-               train: np.ndarray | None = None) -> np.ndarray:
-        """As :meth:`push`, as one array of shape (len(:attr:`keys`), completed blocks)."""
+               train: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
+        """As :meth:`push`, as one array of shape (len(:attr:`keys`), completed blocks), written
+        into ``out`` when given (of that shape, :meth:`completed` blocks)."""
         y = np.asarray(y, dtype=float)
         r = y if residual is None else np.asarray(residual, dtype=float)
         u = np.zeros_like(y) if train is None else np.asarray(train, dtype=float)
@@ -106,7 +111,7 @@ class EnergyEnvelope:
         d = self.decimation
         n = (y.size // d) * d
         self._carry = (y[n:].copy(), r[n:].copy(), u[n:].copy(), b[n:].copy()) if n < y.size else None
-        out = np.empty((len(self.keys), n // d))
+        out = np.empty((len(self.keys), n // d)) if out is None else out
         kernels.block_sums(y, r, u, b, d, out)
         return out
 
@@ -129,21 +134,23 @@ def period_grid(fault_hz: float, window_s: float, bins: int, search: float = 0.0
 def _fold_table(freqs: tuple, n: int, envelope_rate: float, bins: int) -> tuple[np.ndarray, np.ndarray]:
     """Phase bins of ``n`` envelope samples at each frequency: the folding, precomputed.
 
-    Returns ``idx`` (len(freqs), n), the bin floor(frac(t·f)·bins) of sample t (s from the
-    window's first sample) at frequency f (Hz), uint8 up to 256 bins; and ``inv``
-    (len(freqs), bins), 1 / the samples per bin (1 for an empty bin). Phase is measured from the window's first sample:
-    the maximum over bins (the phase search) does not depend on the origin, and the table
-    serves window after window while the frequencies stay the same.
+    Sample t (t / envelope_rate s from the window's first sample) falls at frequency f (Hz)
+    in bin floor(frac(t·f)·bins). Returns ``offsets`` (n, len(freqs)): row f's bin plus
+    f · bins (uint16 when that fits: the table stays in the L1 cache), and ``inv``
+    (len(freqs) · bins,): 1 / the samples per bin (1 for an empty bin). Phase is measured
+    from the window's first sample: the maximum over bins (the phase search) does not
+    depend on the origin, and the table serves window after window while the frequencies
+    stay the same.
     """
     f = np.asarray(freqs, float)
     t = np.arange(n) / envelope_rate
     idx = np.minimum(((np.outer(f, t) % 1.0) * bins).astype(np.int64), bins - 1)
-    rows = (idx + (np.arange(f.size) * bins)[:, None]).ravel()
-    inv = 1.0 / np.maximum(np.bincount(rows, minlength=f.size * bins).astype(float), 1.0).reshape(f.size, bins)
-    idx = idx.astype(np.uint8 if bins <= 256 else np.int64)  # one byte a sample: the table stays in cache
-    idx.setflags(write=False)
+    rows = idx + (np.arange(f.size) * bins)[:, None]
+    inv = 1.0 / np.maximum(np.bincount(rows.ravel(), minlength=f.size * bins).astype(float), 1.0)
+    offsets = np.ascontiguousarray(rows.T.astype(np.uint16 if f.size * bins <= 1 << 16 else np.int64))
+    offsets.setflags(write=False)
     inv.setflags(write=False)
-    return idx, inv
+    return offsets, inv
 
 
 def folded_peakiness(env: np.ndarray, envelope_rate: float, freqs: np.ndarray,
@@ -164,8 +171,8 @@ def folded_peakiness(env: np.ndarray, envelope_rate: float, freqs: np.ndarray,
     freqs = np.atleast_1d(np.asarray(freqs, dtype=float))
     if env.size == 0:
         return np.zeros(freqs.size)
-    idx, inv = _fold_table(tuple(np.round(freqs, 9)), env.size, float(envelope_rate), int(bins))
-    return kernels.fold_peakiness(env, idx, inv, int(bins), int(smooth))
+    offsets, inv = _fold_table(tuple(np.round(freqs, 9)), env.size, float(envelope_rate), int(bins))
+    return kernels.fold_peakiness(env, offsets, inv, int(bins), int(smooth))
 
 
 class FoldBank:
@@ -181,11 +188,11 @@ class FoldBank:
         freqs = np.concatenate([[fault_hz], np.asarray(decoys_hz, float)])
         allf = (freqs[:, None] * grid[None, :]).ravel()
         self.fault_hz, self.grid, self.bins = fault_hz, grid, int(bins)
-        self._idx, self._inv = _fold_table(tuple(np.round(allf, 9)), n, float(envelope_rate), self.bins)
+        self._offsets, self._inv = _fold_table(tuple(np.round(allf, 9)), n, float(envelope_rate), self.bins)
 
     def cfar(self, env: np.ndarray) -> tuple[float, float, float]:
         """``(ratio, fault_peakiness, best_hz)`` of one window's envelope (:func:`cfar_periodicity`)."""
-        ratio, peak, j = kernels.cfar_fold(np.ascontiguousarray(env, dtype=float), self._idx, self._inv,
+        ratio, peak, j = kernels.cfar_fold(np.ascontiguousarray(env, dtype=float), self._offsets, self._inv,
                                            self.grid.size, self.bins, 2)
         return float(ratio), float(peak), float(self.fault_hz * self.grid[j])
 

@@ -47,9 +47,8 @@ class StreamBlocks:
             return 0
         return self.first_block + self._fill - self._start
 
-    def _append(self, blocks: np.ndarray) -> None:
-        """Append columns (len(keys), m)."""
-        m = blocks.shape[1]
+    def _reserve(self, m: int) -> np.ndarray:
+        """The next ``m`` columns (a view, counted as held), for the caller to fill."""
         if self._fill + m > self._store.shape[1]:
             held = self._fill - self._start
             if held + m > self._store.shape[1] // 2:  # grow; else shift down into the free half
@@ -59,8 +58,8 @@ class StreamBlocks:
             else:
                 self._store[:, :held] = self._store[:, self._start:self._fill]
             self._start, self._fill = 0, held
-        self._store[:, self._fill:self._fill + m] = blocks
         self._fill += m
+        return self._store[:, self._fill - m:self._fill]
 
     def push(self, first_index: int, y, r, u) -> None:
         """Append samples y, r, u (equal length) starting at stream index ``first_index``."""
@@ -72,7 +71,7 @@ class StreamBlocks:
             self.next_sample = first_index + skip
         elif first_index > self.next_sample:  # gap: pad with NaN blocks, restart alignment
             gap_blocks = (first_index - self.next_sample + d - 1) // d + 1
-            self._append(np.full((len(self.env.keys), gap_blocks), np.nan))
+            self._reserve(gap_blocks)[:] = np.nan
             self.env = self.env.fresh()
             target = self.n_blocks * d
             skip = target - first_index
@@ -83,7 +82,7 @@ class StreamBlocks:
             y, r, u = y[skip:], r[skip:], u[skip:]
         if y.size == 0:
             return
-        self._append(self.env.blocks(y, r, u))
+        self.env.blocks(y, r, u, out=self._reserve(self.env.completed(y.size)))
         self.next_sample += y.size
 
     def window(self, b0: int, b1: int) -> dict[str, np.ndarray] | None:
