@@ -191,10 +191,10 @@ class FoldBank:
         self._offsets, self._inv = _fold_table(tuple(np.round(allf, 9)), n, float(envelope_rate), self.bins)
 
     def cfar(self, env: np.ndarray) -> tuple[float, float, float]:
-        """``(ratio, fault_peakiness, best_hz)`` of one window's envelope (:func:`cfar_periodicity`)."""
-        ratio, peak, j = kernels.cfar_fold(np.ascontiguousarray(env, dtype=float), self._offsets, self._inv,
-                                           self.grid.size, self.bins, 2)
-        return float(ratio), float(peak), float(self.fault_hz * self.grid[j])
+        """``(ratio, fault_peakiness, best_hz)`` of one window's envelope, a contiguous float
+        array (:func:`cfar_periodicity`)."""
+        ratio, peak, j = kernels.cfar_fold(env, self._offsets, self._inv, self.grid.size, self.bins, 2)
+        return ratio, peak, float(self.fault_hz * self.grid[j])
 
 
 def cfar_periodicity(env: np.ndarray, envelope_rate: float, fault_hz: float,
@@ -208,7 +208,8 @@ def cfar_periodicity(env: np.ndarray, envelope_rate: float, fault_hz: float,
     impacts at the fault period; 0 when that median is not positive); best_hz = the
     searched frequency that maximised the peakiness.
     """
-    return FoldBank(fault_hz, decoys_hz, grid, np.size(env), envelope_rate, bins).cfar(env)
+    env = np.ascontiguousarray(env, dtype=float)
+    return FoldBank(fault_hz, decoys_hz, grid, env.size, envelope_rate, bins).cfar(env)
 
 
 def train_autocorrelation(train: np.ndarray) -> np.ndarray:
