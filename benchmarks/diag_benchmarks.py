@@ -4,7 +4,10 @@
   correct detection after the true change, in seconds and in fault periods.
 * :func:`false_alarm_rate` — false alarms per hour on a noise-only stream (white noise,
   or the simulator's NORMAL state with sensor noise).
-* :func:`throughput` — diagnoser CPU time per second of signal, as a multiple of real time.
+* :func:`throughput` — diagnoser CPU time per second of signal, as a multiple of real time
+  (start-up included).
+* :func:`steady_state_throughput` — observers + decision on one motor, and the decision
+  alone, in steady state (start-up excluded).
 * :func:`block_contributions` — per-window accuracy of each decision block alone
   (thesis-literal cross-correlation, CFAR periodicity, model-explains, all together).
 
@@ -21,7 +24,7 @@ import numpy as np
 from bearing_common.bearings import CATALOG, fault_frequency
 from bearing_common.states import FaultState
 from bearing_diagnoser.decision import STREAMS, Diagnoser
-from bearing_diagnoser.decision_config import config_for
+from bearing_diagnoser.decision_config import NO_MODEL, config_for
 from bearing_diagnoser.offline import diagnose_measurement, diagnose_recording
 from bearing_recordings.recording import Recording
 
@@ -99,6 +102,64 @@ def throughput(duration_s: float = 2.0, model_set: str = "sim_48k", fs: float = 
     return rows
 
 
+def steady_state_throughput(model_set: str = "sim_48k", fs: float = 48000.0, seconds: float = 3.0,
+                            repeats: int = 3, record=None) -> list[tuple[str, float, str]]:
+    """Rows: observers + decision on one motor, and the decision alone, in steady state (x real time).
+
+    The input is ``record`` (a :class:`Recording`; default: 1 + ``seconds`` s of the
+    simulator's outer-race fault at 1800 rpm with sensor noise), fed in 0.01 s chunks as
+    the live graph does: through the OR and IR observers of ``model_set`` into the
+    diagnoser; with model set ``none`` the observers pass the measurement through (they
+    cost nothing) and both streams carry it. Start-up is not timed: building the
+    observers and the diagnoser, the calibration and the warm-up of p-value tables and
+    kernels, and the first second of signal (first windows, folding tables, band choice).
+    Each repeat starts afresh; CPU time of this process (``time.process_time``), one BLAS
+    thread. Values are the best repeat, the unit gives the range over the repeats; the
+    decision alone (its share of the same run) only where observers run.
+    """
+    from bearing_diagnoser import kernels, significance
+    from bearing_observer.observer import FaultObserver
+    rec = record or simulate_case("or", 1800.0, 4.5e-3, segment_s=0.5 * (1.0 + seconds), sample_rate=fs)
+    x = rec.accel
+    warm = int(fs)
+    chunk = int(round(0.01 * fs))
+    ff = {h: fault_frequency(BEARING, h, 1800.0) for h in HYPOTHESES}
+    significance.warm_up()
+    kernels.warm_up()
+    total, decision = [], []
+    for _ in range(repeats):
+        dg = Diagnoser(config_for(model_set), model_set, BEARING, fs)
+        dg.tell_speed(1800.0)
+        obs = {h: FaultObserver.from_model_set(model_set, h.label, 1800.0, fs) for h in HYPOTHESES} \
+            if model_set != NO_MODEL else {}
+        cpu_obs = 0.0
+        start = time.process_time()
+        for i in range(0, x.size - chunk + 1, chunk):
+            if i == warm:
+                cpu_obs, start = 0.0, time.process_time()
+            y = x[i:i + chunk]
+            for h in HYPOTHESES:
+                if obs:
+                    t0 = time.process_time()
+                    out = obs[h].process(y)
+                    cpu_obs += time.process_time() - t0
+                    dg.update(h, i, fs, out.residual, out.estimate, out.impulse_train, obs[h].fault_frequency)
+                else:
+                    dg.update(h, i, fs, y, None, None, ff[h])
+        cpu = time.process_time() - start
+        timed = (x.size - warm) // chunk * chunk / fs
+        total.append(timed / cpu)
+        decision.append(timed / (cpu - cpu_obs))
+    tag = f"one motor, {fs / 1000:g} kHz, steady state ({model_set})"
+    unit = "x real time (best of {n}; range {lo:.0f}-{hi:.0f})"
+    rows = [(f"observers + decision, {tag}", round(max(total), 1),
+             unit.format(n=repeats, lo=min(total), hi=max(total)))]
+    if obs:
+        rows.append((f"decision alone, {tag}", round(max(decision), 1),
+                     unit.format(n=repeats, lo=min(decision), hi=max(decision))))
+    return rows
+
+
 def block_contributions(noise_density: float = 4.5e-3, rpm: float = 1800.0, xcorr_threshold: float = 0.1,
                         explained_threshold: float = 0.3, cases=None) -> list[tuple[str, float, str]]:
     """Rows: fraction of windows labelled correctly by each block alone (model method).
@@ -154,6 +215,15 @@ def bench_diagnoser_throughput():
         throughput(model_set="none", fs=12000.0, with_observers=False)
 
 
+def bench_steady_state_throughput():
+    """Observers + decision, one motor, steady state: both front ends at 48 kHz and 12 kHz."""
+    rows = []
+    for fs, sim_set in ((48000.0, "sim_48k"), (12000.0, "sim_12k")):
+        rec = simulate_case("or", 1800.0, 4.5e-3, segment_s=2.0, sample_rate=fs)
+        rows += steady_state_throughput(sim_set, fs, record=rec) + steady_state_throughput(NO_MODEL, fs, record=rec)
+    return rows
+
+
 def bench_false_alarms():
     return false_alarm_rate(duration_s=600.0) + false_alarm_rate(duration_s=600.0, model_set="none",
                                                                  fs=12000.0, rpm=1797.0)
@@ -169,7 +239,8 @@ def bench_block_contributions():
 
 def main(argv=None) -> int:
     """Print all benchmark rows as tab-separated text."""
-    rows = bench_diagnoser_throughput() + bench_false_alarms() + bench_detection_delays() + bench_block_contributions()
+    rows = bench_diagnoser_throughput() + bench_steady_state_throughput() + bench_false_alarms() + \
+        bench_detection_delays() + bench_block_contributions()
     for fig, val, unit in rows:
         print(f"{fig}\t{val}\t{unit}")
     return 0

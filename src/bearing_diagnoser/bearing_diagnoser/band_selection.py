@@ -24,6 +24,7 @@ and finds 25 of 34 faults against 33.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import groupby
 
 import numpy as np
 
@@ -94,17 +95,15 @@ def choose_band(x: np.ndarray, fs: float, f_top: float, f_usable: float, fr: flo
     if not n_candidates:
         return None
     spectrum = unit_magnitude(raw) if prewhiten else raw
-    best, best_score = None, np.inf
-    for bands in groups:
-        if criterion == "kurtogram":
-            score = -band_kurtosis(spectrum, x.size, fs, bands)
-        else:
-            ses, df = band_ses(spectrum, x.size, fs, bands, f_top)
-            evidence = comb_evidence(normalise(ses), df, fr, terms, rho, mask_shaft)
-            score = np.min([e[0] for e in evidence.values()], axis=0)
-        i = int(np.argmin(score))
-        if score[i] < best_score:
-            best, best_score = bands[i], float(score[i])
+    bands = np.concatenate(groups)
     if criterion == "kurtogram":
+        best = bands[int(np.argmax(np.concatenate([band_kurtosis(spectrum, x.size, fs, g) for g in groups])))]
         return BandChoice(float(best[0]), float(best[1]), 1, 0.0)
-    return BandChoice(float(best[0]), float(best[1]), n_candidates, best_score)
+    ses = [band_ses(spectrum, x.size, fs, g, f_top)[0] for g in groups]
+    score = []
+    for _, run in groupby(ses, key=lambda s: s.shape[1]):  # all bands of one SES length in one pass
+        evidence = comb_evidence(normalise(np.concatenate(list(run))), fs / x.size, fr, terms, rho, mask_shaft)
+        score.append(np.min([e[0] for e in evidence.values()], axis=0))
+    score = np.concatenate(score)
+    i = int(np.argmin(score))
+    return BandChoice(float(bands[i, 0]), float(bands[i, 1]), n_candidates, float(score[i]))

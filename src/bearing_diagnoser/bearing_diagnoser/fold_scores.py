@@ -37,10 +37,11 @@ import numpy as np
 from bearing_common.bearings import Bearing, fault_frequency
 from bearing_common.states import FaultState
 
+from . import kernels
 from .bearing_lines import decoy_frequencies
 from .periodicity import (
     XCORR_LAG_S,
-    cfar_periodicity,
+    FoldBank,
     cfar_ses,
     explain_away,
     impact_phase_mask,
@@ -50,6 +51,9 @@ from .periodicity import (
 
 #: The hypotheses the folding front end tests.
 HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE)
+
+#: Per hypothesis, the names of its scores (``<h>_cfar``, ...), spelt once instead of per window.
+_NAMES = {h: {k: f"{h.label}_{k}" for k in ("cfar", "cfar_raw", "hz", "explained", "xcorr")} for h in HYPOTHESES}
 
 
 @dataclass(frozen=True)
@@ -123,6 +127,7 @@ class FoldScorer:
         self.bearing = bearing
         self.thresholds = thresholds
         self._decoy_ratio: dict = {}
+        self._banks: dict = {}  # hypothesis -> ((fault Hz, window blocks, envelope rate), FoldBank)
 
     def decoys(self, hypothesis: FaultState, fault_hz: float) -> np.ndarray:
         """Decoy frequencies (Hz) for ``hypothesis`` at ``fault_hz``: fixed multiples of it
@@ -143,12 +148,16 @@ class FoldScorer:
         return tuple(k for k in range(1, s.ses_harmonics + 1)
                      if all(abs(k * f / (m * g) - 1.0) > 0.03 for g in other for m in range(1, 6)))
 
-    def _cfar(self, h: FaultState, env: np.ndarray, fe: float, b0: int, fault_hz: float):
+    def _cfar(self, h: FaultState, env: np.ndarray, fe: float, fault_hz: float):
         s = self.settings
         if s.statistic == "ses":
             return cfar_ses(env, fe, fault_hz, self.decoys(h, fault_hz), s.search, self.ses_harmonics(h))
-        grid = period_grid(fault_hz, s.window_s, s.bins, s.search)
-        return cfar_periodicity(env, fe, fault_hz, self.decoys(h, fault_hz), grid, b0, s.bins)
+        key = (fault_hz, env.size, fe)
+        bank = self._banks.get(h)
+        if bank is None or bank[0] != key:  # built when the speed (or the window) changes
+            grid = period_grid(fault_hz, s.window_s, s.bins, s.search)
+            bank = self._banks[h] = key, FoldBank(fault_hz, self.decoys(h, fault_hz), grid, env.size, fe, s.bins)
+        return bank[1].cfar(env)
 
     def scores(self, windows: dict, fault_hz: dict, has_model: dict, decimation: int, b0: int,
                fe: float) -> dict[str, float]:
@@ -162,41 +171,45 @@ class FoldScorer:
         s = self.settings
         scores: dict[str, float] = {}
         for h, win in windows.items():
-            n = win["env"].size * decimation
-            ratio, _, best_hz = self._cfar(h, win["env"], fe, b0, fault_hz[h])
-            scores[f"{h.label}_cfar"] = scores[f"{h.label}_cfar_raw"] = ratio
-            scores[f"{h.label}_hz"] = best_hz
-            sy, sy2 = win["y"].sum(), win["y2"].sum()
+            name = _NAMES[h]
+            env = win["env"]
+            w = env.size
+            n = w * decimation
+            q = max(1, int(round(s.quiet_tail * w)))
+            sy, sy2, sr2, se, s_older, s_tail, sb4 = kernels.window_sums(env, win["b4"], win["y"], win["y2"],
+                                                                         win["r2"], q)
+            ratio, _, best_hz = self._cfar(h, env, fe, fault_hz[h])
+            scores[name["cfar"]] = scores[name["cfar_raw"]] = ratio
+            scores[name["hz"]] = best_hz
             var_y = sy2 - sy * sy / n
             if has_model[h]:
-                scores[f"{h.label}_explained"] = float(1.0 - win["r2"].sum() / var_y) if var_y > 0 else 0.0
-                scores[f"{h.label}_xcorr"] = train_correlation(win["ar"], win["u"], s.xcorr_lag_s * fe)
+                scores[name["explained"]] = float(1.0 - sr2 / var_y) if var_y > 0 else 0.0
+                scores[name["xcorr"]] = train_correlation(win["ar"], win["u"], s.xcorr_lag_s * fe)
             if "rms" not in scores:
                 scores["rms"] = float(math.sqrt(max(var_y, 0.0) / n))
-                m2 = win["env"].mean()
-                q = max(1, int(round(s.quiet_tail * win["env"].size)))
-                older = win["env"][:-q].mean() if win["env"].size > q else m2
-                scores["tail_ratio"] = float(win["env"][-q:].mean() / older) if older > 0 else 1.0
-                scores["kurtosis"] = float(win["b4"].mean() / (m2 * m2)) if m2 > 0 else 0.0
+                m2 = se / w
+                older = s_older / (w - q) if w > q else m2
+                scores["tail_ratio"] = float(s_tail / min(q, w) / older) if older > 0 else 1.0
+                scores["kurtosis"] = float(sb4 / w / (m2 * m2)) if m2 > 0 else 0.0
         if len(windows) > 1 and s.explain_away:
-            best = max(windows, key=lambda h: scores[f"{h.label}_cfar"])
-            mask = impact_phase_mask(windows[best]["env"], fe, scores[f"{best.label}_hz"], b0, s.bins)
+            best = max(windows, key=lambda h: scores[_NAMES[h]["cfar"]])
+            mask = impact_phase_mask(windows[best]["env"], fe, scores[_NAMES[best]["hz"]], b0, s.bins)
             for h in windows:
                 if h != best:
                     env = explain_away(windows[h]["env"], mask)
-                    scores[f"{h.label}_cfar"] = self._cfar(h, env, fe, b0, fault_hz[h])[0]
+                    scores[_NAMES[h]["cfar"]] = self._cfar(h, env, fe, fault_hz[h])[0]
         return scores
 
     def label(self, scores: dict[str, float], hypotheses) -> tuple[FaultState, float]:
         """Window label and its confidence in [0, 1]; adds ``<h>`` = c_h / threshold to ``scores``."""
         s = self.settings
         thr, kthr = self.thresholds
-        c = {h: scores.get(f"{h.label}_cfar", float("nan")) for h in hypotheses}
+        c = {h: scores.get(_NAMES[h]["cfar"], float("nan")) for h in hypotheses}
         for h in hypotheses:
             scores[h.label] = c[h] / thr
-        valid = {h: v for h, v in c.items() if np.isfinite(v)}
+        valid = {h: v for h, v in c.items() if math.isfinite(v)}
         cmax = max(valid.values()) if valid else 0.0
-        normal_conf = float(np.clip((thr - cmax) / max(thr - 1.0, 1e-9), 0.0, 1.0))
+        normal_conf = _unit((thr - cmax) / max(thr - 1.0, 1e-9))
         if scores["rms"] < s.rms_floor:
             return FaultState.NORMAL, 1.0
         if scores.get("tail_ratio", 1.0) < s.quiet_ratio:
@@ -204,21 +217,26 @@ class FoldScorer:
         significant = sorted((h for h, v in valid.items() if v >= thr), key=lambda h: valid[h], reverse=True)
         if not significant:
             if s.use_kurtosis and scores["kurtosis"] > kthr:
-                return FaultState.UNKNOWN, float(np.clip(1.0 - kthr / scores["kurtosis"], 0.0, 1.0))
+                return FaultState.UNKNOWN, _unit(1.0 - kthr / scores["kurtosis"])
             return FaultState.NORMAL, normal_conf
         best = significant[0]
         others = [v for h, v in valid.items() if h != best]
         dom = valid[best] / max(others) if others and max(others) > 0 else float("inf")
-        strength = float(np.clip(1.0 - thr / valid[best], 0.0, 1.0))
-        clarity = float(np.clip((dom - 1.0) / (s.dominance - 1.0), 0.0, 1.0))
+        strength = _unit(1.0 - thr / valid[best])
+        clarity = _unit((dom - 1.0) / (s.dominance - 1.0))
         if len(significant) == 1 or dom >= s.dominance:
             return best, strength * clarity
         second = significant[1]
-        eb = scores.get(f"{best.label}_explained")
-        es = scores.get(f"{second.label}_explained")
+        eb = scores.get(_NAMES[best]["explained"])
+        es = scores.get(_NAMES[second]["explained"])
         if eb is not None and es is not None:
             if eb - es >= s.explained_margin:
                 return best, 0.5 * strength
             if es - eb >= s.explained_margin:
-                return second, 0.5 * float(np.clip(1.0 - thr / valid[second], 0.0, 1.0))
-        return FaultState.UNKNOWN, float(np.clip(1.0 - 1.0 / dom, 0.0, 1.0))
+                return second, 0.5 * _unit(1.0 - thr / valid[second])
+        return FaultState.UNKNOWN, _unit(1.0 - 1.0 / dom)
+
+
+def _unit(x: float) -> float:
+    """``x`` clipped to [0, 1] (``np.clip`` of one number, without its per-call cost)."""
+    return min(max(x, 0.0), 1.0)

@@ -21,7 +21,9 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy import signal, sparse
+from scipy import signal
+
+from . import kernels
 
 #: Target envelope sample rate (Hz): enough for folding at BPFI (≈ 162 Hz) with 16 bins.
 ENVELOPE_RATE = 4000.0
@@ -73,7 +75,7 @@ class EnergyEnvelope:
             self._sos = signal.butter(4, [lo, hi], btype="bandpass", fs=sample_rate, output="sos")
             self._zi = np.zeros((self._sos.shape[0], 2))
         self.keys = (("env", "b4") if self._sos is not None else ()) + self.SUMS
-        self._carry: dict[str, np.ndarray] = {k: np.zeros(0) for k in ("b", "y", "r", "u")}
+        self._carry: tuple | None = None  # (y, r, u, b) of a partial block, if any
 
     @property
     def envelope_rate(self) -> float:
@@ -87,30 +89,30 @@ class EnergyEnvelope:
     def push(self, y: np.ndarray, residual: np.ndarray | None = None,
              train: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """Feed measurement ``y`` (and optionally residual and train, same length)."""
+        return dict(zip(self.keys, self.blocks(y, residual, train)))
+
+    def completed(self, n: int) -> int:
+        """How many blocks ``n`` more samples complete."""
+        return (n + (0 if self._carry is None else self._carry[0].size)) // self.decimation
+
+    def blocks(self, y: np.ndarray, residual: np.ndarray | None = None,
+               train: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
+        """As :meth:`push`, as one array of shape (len(:attr:`keys`), completed blocks), written
+        into ``out`` when given (of that shape, :meth:`completed` blocks)."""
         y = np.asarray(y, dtype=float)
         r = y if residual is None else np.asarray(residual, dtype=float)
         u = np.zeros_like(y) if train is None else np.asarray(train, dtype=float)
+        b = y
         if self._sos is not None:
-            b, self._zi = signal.sosfilt(self._sos, y, zi=self._zi)
-        else:
-            b = np.zeros(0)
-        c = self._carry
-        y = np.concatenate([c["y"], y])
-        r = np.concatenate([c["r"], r])
-        u = np.concatenate([c["u"], u])
+            b = np.empty_like(y)
+            kernels.sos_filter(self._sos, self._zi, y, b)
+        if self._carry is not None:
+            y, r, u, b = (np.concatenate(p) for p in zip(self._carry, (y, r, u, b)))
         d = self.decimation
         n = (y.size // d) * d
-        for k, arr in (("y", y), ("r", r), ("u", u)):
-            c[k] = arr[n:].copy()
-        y, r, u = (a[:n].reshape(-1, d) for a in (y, r, u))
-        out = {"y": y.sum(axis=1), "y2": (y * y).sum(axis=1), "r2": (r * r).sum(axis=1),
-               "ar": np.abs(r).sum(axis=1), "u": u.sum(axis=1)}
-        if self._sos is not None:
-            b = np.concatenate([c["b"], b])
-            c["b"] = b[n:].copy()
-            b2 = b[:n].reshape(-1, d) ** 2
-            out["env"] = b2.mean(axis=1)
-            out["b4"] = (b2 * b2).mean(axis=1)
+        self._carry = (y[n:].copy(), r[n:].copy(), u[n:].copy(), b[n:].copy()) if n < y.size else None
+        out = np.empty((len(self.keys), n // d)) if out is None else out
+        kernels.block_sums(y, r, u, b, d, out)
         return out
 
 
@@ -129,21 +131,26 @@ def period_grid(fault_hz: float, window_s: float, bins: int, search: float = 0.0
 
 
 @lru_cache(maxsize=64)
-def _fold_matrix(freqs: tuple, n: int, envelope_rate: float, bins: int) -> sparse.csr_matrix:
-    """Sparse (len(freqs)·bins, n) matrix averaging the envelope into phase bins.
+def _fold_table(freqs: tuple, n: int, envelope_rate: float, bins: int) -> tuple[np.ndarray, np.ndarray]:
+    """Phase bins of ``n`` envelope samples at each frequency: the folding, precomputed.
 
-    Phase is measured from the window's first sample: the maximum over bins (the phase
-    search) does not depend on the origin, and the matrix can be reused window after
-    window while the frequencies stay the same.
+    Sample t (t / envelope_rate s from the window's first sample) falls at frequency f (Hz)
+    in bin floor(frac(t·f)·bins). Returns ``offsets`` (n, len(freqs)): row f's bin plus
+    f · bins (uint16 when that fits: the table stays in the L1 cache), and ``inv``
+    (len(freqs) · bins,): 1 / the samples per bin (1 for an empty bin). Phase is measured
+    from the window's first sample: the maximum over bins (the phase search) does not
+    depend on the origin, and the table serves window after window while the frequencies
+    stay the same.
     """
     f = np.asarray(freqs, float)
     t = np.arange(n) / envelope_rate
     idx = np.minimum(((np.outer(f, t) % 1.0) * bins).astype(np.int64), bins - 1)
-    rows = (idx + (np.arange(f.size) * bins)[:, None]).ravel()
-    cnt = np.bincount(rows, minlength=f.size * bins).astype(float)
-    vals = 1.0 / np.maximum(cnt[rows], 1.0)
-    cols = np.tile(np.arange(n), f.size)
-    return sparse.csr_matrix((vals, (rows, cols)), shape=(f.size * bins, n))
+    rows = idx + (np.arange(f.size) * bins)[:, None]
+    inv = 1.0 / np.maximum(np.bincount(rows.ravel(), minlength=f.size * bins).astype(float), 1.0)
+    offsets = np.ascontiguousarray(rows.T.astype(np.uint16 if f.size * bins <= 1 << 16 else np.int64))
+    offsets.setflags(write=False)
+    inv.setflags(write=False)
+    return offsets, inv
 
 
 def folded_peakiness(env: np.ndarray, envelope_rate: float, freqs: np.ndarray,
@@ -160,19 +167,34 @@ def folded_peakiness(env: np.ndarray, envelope_rate: float, freqs: np.ndarray,
 
     Returns an array of shape (len(freqs),), dimensionless.
     """
-    env = np.asarray(env, dtype=float)
+    env = np.ascontiguousarray(env, dtype=float)
     freqs = np.atleast_1d(np.asarray(freqs, dtype=float))
-    n = env.size
-    if n == 0:
+    if env.size == 0:
         return np.zeros(freqs.size)
-    m = _fold_matrix(tuple(np.round(freqs, 9)), n, float(envelope_rate), int(bins))
-    prof = (m @ env).reshape(freqs.size, bins)
-    if smooth > 1:
-        prof = sum(np.roll(prof, -k, axis=1) for k in range(smooth)) / smooth
-    mean = prof.mean(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        peak = np.where(mean > 0, (prof.max(axis=1) - mean) / mean, 0.0)
-    return peak
+    offsets, inv = _fold_table(tuple(np.round(freqs, 9)), env.size, float(envelope_rate), int(bins))
+    return kernels.fold_peakiness(env, offsets, inv, int(bins), int(smooth))
+
+
+class FoldBank:
+    """The CFAR periodicity of windows of ``n`` envelope samples at one fault frequency.
+
+    Fault and decoy frequencies (Hz) times the relative ``grid`` are folded with one
+    precomputed table (:func:`_fold_table`), so that a window costs one compiled pass
+    (:func:`.kernels.cfar_fold`). See :func:`cfar_periodicity`.
+    """
+
+    def __init__(self, fault_hz: float, decoys_hz: np.ndarray, grid: np.ndarray, n: int, envelope_rate: float,
+                 bins: int = 16):
+        freqs = np.concatenate([[fault_hz], np.asarray(decoys_hz, float)])
+        allf = (freqs[:, None] * grid[None, :]).ravel()
+        self.fault_hz, self.grid, self.bins = fault_hz, grid, int(bins)
+        self._offsets, self._inv = _fold_table(tuple(np.round(allf, 9)), n, float(envelope_rate), self.bins)
+
+    def cfar(self, env: np.ndarray) -> tuple[float, float, float]:
+        """``(ratio, fault_peakiness, best_hz)`` of one window's envelope, a contiguous float
+        array (:func:`cfar_periodicity`)."""
+        ratio, peak, j = kernels.cfar_fold(env, self._offsets, self._inv, self.grid.size, self.bins, 2)
+        return ratio, peak, float(self.fault_hz * self.grid[j])
 
 
 def cfar_periodicity(env: np.ndarray, envelope_rate: float, fault_hz: float,
@@ -181,17 +203,13 @@ def cfar_periodicity(env: np.ndarray, envelope_rate: float, fault_hz: float,
     """CFAR-normalised periodicity at ``fault_hz``.
 
     Returns ``(ratio, fault_peakiness, best_hz)``: ratio = max over the grid of the
-    peakiness at ``fault_hz · grid`` divided by the median over decoys of the same max at
-    ``decoy · grid`` (dimensionless, ≈ 1 on noise, ≫ 1 for impacts at the fault period);
-    best_hz = the searched frequency that maximised the peakiness.
+    peakiness (:func:`folded_peakiness`) at ``fault_hz · grid`` divided by the median over
+    decoys of the same max at ``decoy · grid`` (dimensionless, ≈ 1 on noise, ≫ 1 for
+    impacts at the fault period; 0 when that median is not positive); best_hz = the
+    searched frequency that maximised the peakiness.
     """
-    freqs = np.concatenate([[fault_hz], np.asarray(decoys_hz, float)])
-    allf = (freqs[:, None] * grid[None, :]).ravel()
-    pk = folded_peakiness(env, envelope_rate, allf, first_block, bins).reshape(freqs.size, grid.size)
-    best = pk.max(axis=1)
-    ref = float(np.median(best[1:]))
-    ratio = float(best[0] / ref) if ref > 0 else 0.0
-    return ratio, float(best[0]), float(fault_hz * grid[int(np.argmax(pk[0]))])
+    env = np.ascontiguousarray(env, dtype=float)
+    return FoldBank(fault_hz, decoys_hz, grid, env.size, envelope_rate, bins).cfar(env)
 
 
 def train_autocorrelation(train: np.ndarray) -> np.ndarray:
@@ -222,33 +240,17 @@ def train_correlation(abs_residual_blocks: np.ndarray, train_blocks: np.ndarray,
     """Thesis-literal score of one window: max Pearson correlation of |r| with u over lags.
 
     Both inputs are per-block sums (same blocks as the envelope); lags 0..``max_lag``
-    blocks with |r| lagging u (the observer's impulse response follows the impulse).
-    Returns a value in [−1, 1] (0 when the train is empty).
+    blocks (at most n − 3) with |r| lagging u (the observer's impulse response follows the
+    impulse): x = a[k:], z = u[:n − k]. Returns a value in [−1, 1] (0 when the train is
+    empty; lags where either part is constant are skipped; floored at 0 when lag 0 is).
     """
-    a = np.asarray(abs_residual_blocks, float)
-    u = np.asarray(train_blocks, float)
+    a = np.ascontiguousarray(abs_residual_blocks, dtype=float)
+    u = np.ascontiguousarray(train_blocks, dtype=float)
     n = min(a.size, u.size)
-    a, u = a[:n], u[:n]
-    lags = np.arange(0, min(int(max(0, max_lag)), n - 3) + 1)
-    if lags.size == 0:
+    last = min(int(max(0, max_lag)), n - 3)
+    if last < 0:
         return 0.0
-    m = n - lags  # overlap length per lag: x = a[k:], z = u[:n-k]
-    ca = np.concatenate([[0.0], np.cumsum(a)])
-    ca2 = np.concatenate([[0.0], np.cumsum(a * a)])
-    cu = np.concatenate([[0.0], np.cumsum(u)])
-    cu2 = np.concatenate([[0.0], np.cumsum(u * u)])
-    mx = (ca[n] - ca[lags]) / m
-    mz = cu[n - lags] / m
-    vx = (ca2[n] - ca2[lags]) / m - mx * mx
-    vz = cu2[n - lags] / m - mz * mz
-    sxz = np.correlate(a, u, mode="full")[n - 1 + lags]
-    tiny = 1e-12 * max(float(np.max(a * a, initial=0.0)), float(np.max(u * u, initial=0.0)), 1e-300)
-    valid = (vx > tiny) & (vz > tiny)
-    if not valid.any():
-        return 0.0
-    c = (sxz[valid] / m[valid] - mx[valid] * mz[valid]) / np.sqrt(vx[valid] * vz[valid])
-    best = float(c.max())
-    return best if valid[0] else max(0.0, best)
+    return float(kernels.train_correlation(a[:n], u[:n], last))
 
 
 def squared_envelope_spectrum(env: np.ndarray, envelope_rate: float, pad: int = 8) -> tuple[np.ndarray, np.ndarray]:
@@ -311,21 +313,10 @@ def impact_phase_mask(env: np.ndarray, envelope_rate: float, freq: float, first_
     impacts folded at the OR period fall into three phase clusters (BPFI/BPFO ≈ 1.51, so
     2·BPFI ≈ 3·BPFO, 0.7 % apart) and would otherwise look periodic at BPFO too.
     """
-    env = np.asarray(env, float)
-    t = np.arange(env.size) / envelope_rate
-    b = np.minimum(((t * freq) % 1.0 * bins).astype(np.int64), bins - 1)
-    sums = np.bincount(b, weights=env, minlength=bins)
-    cnts = np.maximum(np.bincount(b, minlength=bins), 1)
-    prof = sums / cnts
-    prof = sum(np.roll(prof, -k) for k in range(smooth)) / smooth
-    peak = int(np.argmax(prof))
-    sel = {(peak + k) % bins for k in range(-margin, smooth + margin)}
-    return np.isin(b, list(sel))
+    return kernels.impact_phase_mask(np.ascontiguousarray(env, dtype=float), float(envelope_rate), float(freq),
+                                     int(bins), int(smooth), int(margin))
 
 
 def explain_away(env: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Copy of ``env`` with the masked samples replaced by the median of the others."""
-    out = np.array(env, float)
-    if mask.any() and (~mask).any():
-        out[mask] = np.median(out[~mask])
-    return out
+    return kernels.explain_away(np.ascontiguousarray(env, dtype=float), np.ascontiguousarray(mask, dtype=bool))

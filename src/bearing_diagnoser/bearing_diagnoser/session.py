@@ -29,12 +29,11 @@ from bearing_common.states import FaultState
 from bearing_observer.chunk_stream import ChunkStream
 from bearing_observer.model_sets import SHIPPED
 
-from . import significance
+from . import kernels, significance
 from .decision import STREAMS, Diagnoser
 from .decision_config import MODEL_SET_DEFAULTS, config_for
 from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL
 from .state_tracker import Decision
-
 
 #: Fastest plausible shaft (rev/min): anything above is a broken speed source.
 MAX_RPM = 1e6
@@ -92,9 +91,11 @@ class DiagnoserSession:
         self.rejected_speeds = 0
 
     def warm_up(self) -> None:
-        """Compute now what the first windows would otherwise stall on: the p-value tables and
-        the folding thresholds of the simulator model sets (about 1 s each)."""
+        """Compute now what the first windows would otherwise stall on: the p-value tables, the
+        compiled kernels (numba: from its cache, or 15 s to compile after an install) and the
+        folding thresholds of the simulator model sets (about 1 s each)."""
         significance.warm_up()
+        kernels.warm_up()
         for name, cfg in MODEL_SET_DEFAULTS.items():
             if cfg.method == "fold" and (self.values["model_set"] in ("", name)):
                 Diagnoser(cfg, name, load_bearing(self.values["bearing"]), SHIPPED[name].sample_rate).thresholds()

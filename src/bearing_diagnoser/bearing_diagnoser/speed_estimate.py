@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .envelope_spectrum import normalise
+from .envelope_spectrum import hanning, normalise
 
 #: Harmonics of the shaft rate examined.
 N_HARMONICS = 10
@@ -44,7 +44,7 @@ class SpeedEstimate:
 def estimate_speed(x: np.ndarray, fs: float, f_lo: float, f_hi: float, min_lines: int = 3) -> SpeedEstimate | None:
     """Shaft rate in [f_lo, f_hi] Hz from buffer ``x`` (fs Hz); None when no harmonic series is found."""
     n = x.size
-    power = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(n))) ** 2
+    power = np.abs(np.fft.rfft((x - x.mean()) * hanning(n))) ** 2
     df = fs / n
     nb = min(power.size, int(min(0.45 * fs, (N_HARMONICS + 1) * f_hi) / df) + 1)
     if nb < 8 or f_hi <= f_lo:

@@ -85,11 +85,22 @@ class StateTracker:
         if label == self.state:
             self._last_window_of[label] = t0
         if self._posteriors:
-            self.confidence = float(np.mean([_probability(p, self.state) for p in self._posteriors]))
+            self.confidence = _mean([_probability(p, self.state) for p in self._posteriors])
         else:
             same = [x[1] for x in self._labels if x[0] == self.state]
-            self.confidence = float(np.mean(same)) if same else 0.0
+            self.confidence = _mean(same) if same else 0.0
         return changed
+
+
+def _mean(values: list) -> float:
+    """``float(np.mean(values))`` of a non-empty list, without the array conversion below 8
+    values (NumPy sums fewer than 8 terms in sequence; it is called once per window)."""
+    if len(values) >= 8:
+        return float(np.mean(values))
+    total = 0.0
+    for v in values:
+        total += v
+    return float(total / len(values))
 
 
 def _probability(posterior: dict, state: FaultState) -> float:

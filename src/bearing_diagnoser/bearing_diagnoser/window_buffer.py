@@ -18,6 +18,10 @@ from .periodicity import EnergyEnvelope
 class StreamBlocks:
     """Block arrays of one stream (see the module docstring).
 
+    The blocks live in one array of shape (len(keys), capacity), columns ``_start`` to
+    ``_fill``; it doubles when full and is shifted down only when the forgotten part is
+    as large as the held one, so that a chunk costs no copy of the held blocks.
+
     Attributes
     ----------
     fault_hz : float or None
@@ -31,9 +35,10 @@ class StreamBlocks:
     def __init__(self, envelope: EnergyEnvelope):
         self.env = envelope
         self.next_sample: int | None = None  # index of the next expected sample
-        self.first_block: int | None = None
-        self._blocks: dict[str, list[np.ndarray]] = {k: [] for k in envelope.keys}
-        self._arrays: dict[str, np.ndarray] = {k: np.zeros(0) for k in envelope.keys}
+        self.first_block: int | None = None  # absolute index of column _start
+        self._store = np.zeros((len(envelope.keys), 0))
+        self._start = 0
+        self._fill = 0
         self.fault_hz: float | None = None
         self.has_model = False
         self.has_train = False
@@ -43,13 +48,21 @@ class StreamBlocks:
         """Absolute index one past the last completed block."""
         if self.first_block is None:
             return 0
-        return self.first_block + self._arrays["y"].size + sum(a.size for a in self._blocks["y"])
+        return self.first_block + self._fill - self._start
 
-    def _consolidate(self) -> None:
-        if self._blocks["y"]:
-            for k in self.env.keys:
-                self._arrays[k] = np.concatenate([self._arrays[k]] + self._blocks[k])
-                self._blocks[k] = []
+    def _reserve(self, m: int) -> np.ndarray:
+        """The next ``m`` columns (a view, counted as held), for the caller to fill."""
+        if self._fill + m > self._store.shape[1]:
+            held = self._fill - self._start
+            if held + m > self._store.shape[1] // 2:  # grow; else shift down into the free half
+                grown = np.zeros((self._store.shape[0], max(2 * self._store.shape[1], 2 * (held + m), 64)))
+                grown[:, :held] = self._store[:, self._start:self._fill]
+                self._store = grown
+            else:
+                self._store[:, :held] = self._store[:, self._start:self._fill]
+            self._start, self._fill = 0, held
+        self._fill += m
+        return self._store[:, self._fill - m:self._fill]
 
     def push(self, first_index: int, y, r, u) -> None:
         """Append samples y, r, u (equal length) starting at stream index ``first_index``."""
@@ -60,10 +73,8 @@ class StreamBlocks:
             y, r, u = y[skip:], r[skip:], u[skip:]
             self.next_sample = first_index + skip
         elif first_index > self.next_sample:  # gap: pad with NaN blocks, restart alignment
-            self._consolidate()
             gap_blocks = (first_index - self.next_sample + d - 1) // d + 1
-            for k in self.env.keys:
-                self._arrays[k] = np.concatenate([self._arrays[k], np.full(gap_blocks, np.nan)])
+            self._reserve(gap_blocks)[:] = np.nan
             self.env = self.env.fresh()
             target = self.n_blocks * d
             skip = target - first_index
@@ -74,29 +85,26 @@ class StreamBlocks:
             y, r, u = y[skip:], r[skip:], u[skip:]
         if y.size == 0:
             return
-        out = self.env.push(y, r, u)
-        for k in self.env.keys:
-            self._blocks[k].append(out[k])
+        self.env.blocks(y, r, u, out=self._reserve(self.env.completed(y.size)))
         self.next_sample += y.size
 
     def window(self, b0: int, b1: int) -> dict[str, np.ndarray] | None:
-        """Blocks [b0, b1) of every key, or None when they are not (all) held."""
-        self._consolidate()
+        """Blocks [b0, b1) of every key (views, valid until the next push), or None when they
+        are not (all) held."""
         if self.first_block is None:
             return None
         i0, i1 = b0 - self.first_block, b1 - self.first_block
-        if i0 < 0 or i1 > self._arrays["y"].size:
+        if i0 < 0 or i1 > self._fill - self._start:
             return None
-        return {k: v[i0:i1] for k, v in self._arrays.items()}
+        cols = self._store[:, self._start + i0:self._start + i1]
+        return dict(zip(self.env.keys, cols))
 
     def trim(self, keep_from_block: int) -> None:
         """Forget blocks before ``keep_from_block`` (never more than the stream holds: a silent
         stream keeps its place, so its next chunk is seen as the gap it is)."""
-        self._consolidate()
         if self.first_block is None:
             return
-        cut = min(keep_from_block - self.first_block, self._arrays["y"].size)
+        cut = min(keep_from_block - self.first_block, self._fill - self._start)
         if cut > 0:
-            for k in self.env.keys:
-                self._arrays[k] = self._arrays[k][cut:]
+            self._start += cut
             self.first_block += cut
