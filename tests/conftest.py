@@ -1,17 +1,9 @@
-"""Shared test fixtures: where the repository and the recordings in ../shared/data are."""
+"""Shared test fixtures: the recordings in ../shared/data, skipped with the reason when absent."""
 
-import os
 import pathlib
 
 import pytest
-
-REPO_ROOT = pathlib.Path(__file__).resolve().parent.parent
-SHARED_DIR = REPO_ROOT.parent / "shared"
-
-
-def data_dir() -> pathlib.Path:
-    """Directory of the recordings (cwru/, mfpt/, hit-sm/): $BEARING_DATA_DIR or ../shared/data."""
-    return pathlib.Path(os.environ.get("BEARING_DATA_DIR", SHARED_DIR / "data"))
+from data_paths import data_dir
 
 
 def _finder(subdir: str):

@@ -14,7 +14,8 @@ setup(
     zip_safe=False,
     maintainer="bearing-monitor maintainers",
     maintainer_email="maintainers@bearing-monitor.invalid",
-    description="29-degree-of-freedom rotor/bearing/housing simulator (thesis ch. 2, app. A) with outer- and inner-race defects; simulator node and bearing-sim CLI.",
+    description=("29-degree-of-freedom rotor/bearing/housing simulator (thesis ch. 2, app. A) with outer- and "
+                 "inner-race defects; simulator node and bearing-sim CLI."),
     license="Apache-2.0",
     entry_points={
         "console_scripts": [

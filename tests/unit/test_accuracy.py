@@ -10,7 +10,7 @@ how often it was right. Skips with the reason when the recordings are absent.
 from __future__ import annotations
 
 import pytest
-from conftest import REPO_ROOT, data_dir
+from data_paths import REPO_ROOT, data_dir
 
 from bearing_common.states import FaultState
 from bearing_diagnoser.accuracy import calibration, load_manifest, markdown, run, totals

@@ -173,7 +173,8 @@ def test_bag_reader_refuses_cut_and_corrupted_storage(tmp_path_factory, data):
         assert np.all(np.isfinite(rec.accel))
 
 
-yaml_values = st.recursive(st.one_of(st.none(), st.booleans(), st.integers(-10**6, 10**6), floats, st.text(max_size=20)),
+yaml_scalars = st.one_of(st.none(), st.booleans(), st.integers(-10**6, 10**6), floats, st.text(max_size=20))
+yaml_values = st.recursive(yaml_scalars,
                            lambda inner: st.one_of(st.lists(inner, max_size=4),
                                                    st.dictionaries(st.text(max_size=20), inner, max_size=5)),
                            max_leaves=10)

@@ -237,7 +237,8 @@ def bearing_from_dict(data, source: str = "bearing") -> Bearing:
              "pitch_diameter_in", "contact_angle", "contact_angle_deg"}
     unknown = sorted(set(map(str, data)) - known)
     if unknown:
-        raise BearingError(f"{source}: unknown keys {', '.join(map(repr, unknown))}; expected {', '.join(sorted(known))}")
+        raise BearingError(f"{source}: unknown keys {', '.join(map(repr, unknown))}; "
+                           f"expected {', '.join(sorted(known))}")
     n = data.get("rolling_elements")
     if isinstance(n, bool) or not isinstance(n, int):
         raise BearingError(f"{source}: rolling_elements must be an integer, got {n!r}")
