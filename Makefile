@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup demo test unit lint bench clean
+.PHONY: setup demo test unit lint bench accuracy soak clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -24,6 +24,15 @@ lint: setup
 
 bench: setup
 	@$(VENV_PY) benchmarks/run.py --out out/bench.md
+
+# decisions on every development recording, against the textbook baseline, with ablations
+accuracy: setup
+	@$(VENV_PY) benchmarks/accuracy_report.py --out out/accuracy.md
+
+# the whole graph at real time for SOAK_MINUTES (default 30) -> out/soak.md
+SOAK_MINUTES ?= 30
+soak: setup
+	@$(VENV_PY) benchmarks/soak.py --minutes $(SOAK_MINUTES) --out out/soak.md
 
 clean:
 	rm -rf ros_ws/build ros_ws/install ros_ws/log out

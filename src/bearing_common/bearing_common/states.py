@@ -13,7 +13,7 @@ class FaultState(IntEnum):
     NORMAL = 0
     OUTER_RACE = 1
     INNER_RACE = 2
-    BALL = 3  # reserved: no ball model yet
+    BALL = 3  # rolling-element defect (decided by the spectral method only)
     UNKNOWN = 4  # abnormal, but no fault model explains it
 
     @property
