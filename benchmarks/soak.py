@@ -254,7 +254,9 @@ def evaluate(seen: Observations, procs: dict, args) -> tuple[list, bool]:
                      f"{counts}; last {level} '{message}'", ""))
     for name, code in procs["exits"].items():
         ok &= code in (0, None) and procs["restarts"][name] == 0
-        rows.append((f"{name}: exit code at end / restarts", f"{code} / {procs['restarts'][name]}", "0 / 0"))
+        status = "running" if code is None else f"exit {code}"
+        rows.append((f"{name}: at the end / restarts", f"{status} / {procs['restarts'][name]}",
+                     "running or exit 0 / 0"))
     return rows, ok
 
 
