@@ -12,7 +12,9 @@ What the node does between ROS and the decision core:
   (stamp of sample index 0 + index / rate), never from arrival;
 * health: the /diagnostics level and key-values — STALE when no residual arrived within
   the stale timeout, WARN when one observer is silent, when the sensor signal is unusable
-  (:mod:`.sensor_health`) or the state is UNKNOWN, ERROR for a fault, OK for NORMAL.
+  (:mod:`.sensor_health`), when a real machine's shaft speed is unknown (estimated blind
+  from the vibration, which misses most faults: ``bearing-accuracy`` ablation) or the state
+  is UNKNOWN, ERROR for a fault, OK for NORMAL.
 """
 
 from __future__ import annotations
@@ -37,6 +39,9 @@ from .state_tracker import Decision
 
 #: Fastest plausible shaft (rev/min): anything above is a broken speed source.
 MAX_RPM = 1e6
+
+SPEED_UNKNOWN = ("shaft speed unknown: estimated from the vibration, which misses most faults; "
+                 "set the rpm parameter or publish shaft_speed")
 
 
 @dataclass(frozen=True)
@@ -123,6 +128,8 @@ class DiagnoserSession:
                 else f"window {v['window'] or cfg.fold.window_s:g} s")
         self._log("info", f"deciding with the {cfg.method} front end ({name or 'no'} model set), bearing "
                           f"{core.bearing.name}, {what}, false-alarm probability {cfg.pfa:g} per window")
+        if cfg.method == "spectral" and self.shaft_rpm is None and not v["rpm"] > 0:
+            self._log("warning", SPEED_UNKNOWN)
         return core
 
     def _tell_speed(self, core: Diagnoser) -> None:
@@ -221,10 +228,18 @@ class DiagnoserSession:
         elif self.sensor_problem:
             level, message = max(level, LEVEL_WARN), f"sensor problem: {self.sensor_problem}"
             values["sensor"] = self.sensor_problem
+        elif self.speed_unknown:
+            level, message = max(level, LEVEL_WARN), f"{message} ({SPEED_UNKNOWN})"
         if silent:
             level = max(level, LEVEL_WARN)
             message += " (waiting for " + ", ".join(silent) + ")"
         return Health(level, message, values)
+
+    @property
+    def speed_unknown(self) -> bool:
+        """True when the spectral decision estimates the shaft speed blind (no shaft_speed, rpm 0)."""
+        return (self.core is not None and self.core.config.method == "spectral" and self.shaft_rpm is None
+                and not self.values["rpm"] > 0)
 
     def final_health(self, now: float) -> Health:
         """The last status, sent when the node stops."""
