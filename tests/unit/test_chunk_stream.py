@@ -29,8 +29,9 @@ def test_gap_is_accepted_with_resync_and_counted():
 
 
 @pytest.mark.parametrize("mutate, reason", [
-    (lambda t, i, fs, x: (t, i, 0.0, x), "invalid sample rate"),
-    (lambda t, i, fs, x: (t, i, float("nan"), x), "invalid sample rate"),
+    (lambda t, i, fs, x: (t, i, 0.0, x), "not plausible"),
+    (lambda t, i, fs, x: (t, i, 1.2e-7, x), "not plausible"),
+    (lambda t, i, fs, x: (t, i, float("nan"), x), "not plausible"),
     (lambda t, i, fs, x: (t, i, 12000.0, x), "wrong sample rate"),
     (lambda t, i, fs, x: (t, i, fs, x[:0]), "empty chunk"),
     (lambda t, i, fs, x: (t, i, fs, np.where(np.arange(len(x)) == 3, np.inf, x)), "non-finite samples"),

@@ -171,7 +171,7 @@ def test_missing_stream_is_decided_without_after_max_lag():
 
 def test_update_rejects_bad_arguments():
     dg = Diagnoser(config_for("sim_48k"))
-    with pytest.raises(ValueError, match="sample_rate"):
+    with pytest.raises(ValueError, match="sample rate"):
         dg.update(O, 0, 0.0, np.zeros(10), None, None, BPFO)
     with pytest.raises(ValueError, match="fault_frequency"):
         dg.update(O, 0, FS, np.zeros(10), None, None, 0.0)

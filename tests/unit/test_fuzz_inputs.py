@@ -5,7 +5,12 @@
   zero/negative/absurd sample rates, stamps backwards and far in the future, unknown model sets
   and arrays of unequal length: nothing raises, nothing non-finite is published, every
   rejection is counted and logged, and good input is served afterwards;
-* the shaft-speed callback with any float;
+* the observer's vibration callback (:class:`bearing_observer.observer_session.ObserverSession`)
+  with the same kinds of chunks and unknown sources: nothing raises, nothing non-finite is
+  returned, every refusal is counted and logged, good input is observed afterwards;
+* the shaft-speed callbacks of both with any float;
+* the fleet node's fault_state callback (:class:`bearing_fleet.fleet_table.FleetTable`) with
+  any state byte, confidence and times: unknown states and non-finite values are refused;
 * every file loader with random bytes and with valid files cut short: .mat, .npz, rosbag2
   (MCAP), model files (JSON) and bearing files (YAML) — a one-line InputError (or the
   loader's own error type), never another exception.
@@ -21,6 +26,7 @@ import math
 
 import numpy as np
 import pytest
+from bearing_fleet.fleet_table import FleetTable
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -29,6 +35,7 @@ from bearing_common.states import FaultState
 from bearing_diagnoser.diagnoser_node_config import PARAMETERS
 from bearing_diagnoser.session import DiagnoserSession
 from bearing_diagnoser.synthetic import burst_train, white_noise
+from bearing_observer.observer_session import ObserverSession
 from bearing_recordings.load import load_recording
 from bearing_recordings.recording import InputError
 
@@ -49,13 +56,18 @@ def new_session():
 #: Good input after the fuzzing: an outer-race fault the session must still diagnose.
 GOOD = burst_train(1.5, FS, 106.5, amplitude=3.0, jitter=0.01) + white_noise(1.5, FS, 4.5e-3)
 
+stamps = st.one_of(st.floats(-1e3, 1e12), st.sampled_from([0.0, 1e15, -5.0]))
+indices = st.one_of(st.integers(0, 10**7), st.sampled_from([0, 2**62]))
+sizes = st.one_of(st.integers(0, 2000), st.sampled_from([0, 1, 2_000_001]))
+poisons = st.sampled_from([None, math.nan, math.inf, -math.inf])
+
 chunk = st.fixed_dictionaries({
     "hypothesis": st.sampled_from([O, I]),
-    "stamp": st.one_of(st.floats(-1e3, 1e12), st.sampled_from([0.0, 1e15, -5.0])),
-    "first_index": st.one_of(st.integers(0, 10**7), st.sampled_from([0, 2**62])),
+    "stamp": stamps,
+    "first_index": indices,
     "rate": rates,
-    "n": st.one_of(st.integers(0, 2000), st.sampled_from([0, 1, 2_000_001])),
-    "poison": st.sampled_from([None, math.nan, math.inf, -math.inf]),
+    "n": sizes,
+    "poison": poisons,
     "ragged": st.booleans(),
     "model_set": st.sampled_from(["", "none", "sim_48k", "cwru_de_6205", "no-such-set", "x" * 300]),
     "fault_hz": floats,
@@ -103,6 +115,55 @@ def test_shaft_speed_callback_takes_any_float(rad_s):
     session, _ = new_session()
     session.on_speed(rad_s)
     assert session.shaft_rpm is None or (math.isfinite(session.shaft_rpm) and session.shaft_rpm > 0)
+    observer = ObserverSession(O, "6205", rpm=1797.0)
+    observer.on_speed(rad_s)
+    assert math.isfinite(observer.rpm) and observer.rpm > 0
+
+
+vibration_chunk = st.fixed_dictionaries({
+    "stamp": stamps,
+    "first_index": indices,
+    "rate": rates,
+    "n": sizes,
+    "poison": poisons,
+    "source": st.sampled_from(["simulator", "cwru", "mfpt", "", "accelerometer_3", "x" * 300, "bad\nsource"]),
+})
+
+
+@settings(max_examples=CASES // 2, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(vibration_chunk, min_size=1, max_size=6), st.sampled_from([O, I]))
+def test_vibration_callback_survives_anything_and_keeps_serving(chunks, fault):
+    logged = []
+    session = ObserverSession(fault, "6205", rpm=1797.0, log=lambda level, text: logged.append((level, text)))
+    rng = np.random.default_rng(0)
+    for c in chunks:
+        x, _, _ = _arrays(dict(c, ragged=False), rng)
+        out = session.on_chunk(c["stamp"], c["first_index"], c["rate"], c["source"], x)
+        if out is not None:
+            assert all(np.all(np.isfinite(a)) and a.size == x.size for a in (out.residual, out.estimate))
+    refused = session.counts["rejected"] + session.counts["no model"]
+    assert (refused > 0) == any(level in ("warning", "error") and "bearing" not in text for level, text in logged)
+    # good input afterwards: a fresh stream (index 0, later stamp) is observed
+    y = GOOD[:6000]
+    out = [session.on_chunk(2e12 + i / FS, i, FS, "cwru", y[i:i + 1200]) for i in range(0, y.size, 1200)]
+    assert all(o is not None and np.all(np.isfinite(o.residual)) for o in out)
+    assert out[-1].model_set == "cwru_de_6205"
+
+
+@settings(max_examples=CASES, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["motor_1", "", "a/b"]), st.integers(0, 255), floats, floats, floats),
+                min_size=1, max_size=6))
+def test_fleet_table_refuses_malformed_states_and_keeps_serving(updates):
+    table = FleetTable(stale_timeout=5.0)
+    for motor, state, confidence, onset, stamp in updates:
+        try:
+            table.update(motor, state, confidence, onset, stamp, now=1.0)
+        except ValueError as exc:
+            assert "\n" not in str(exc)
+    assert all(math.isfinite(r.confidence) and math.isfinite(r.onset) for r in table.rows())
+    table.render(now=2.0)
+    assert table.update("motor_9", 1, 0.9, 0.5, 1.0, now=2.0)
+    assert table.rows()[-1].state == FaultState.OUTER_RACE
 
 
 # ---------------------------------------------------------------------------------------

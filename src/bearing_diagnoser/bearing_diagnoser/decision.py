@@ -27,7 +27,7 @@ import numpy as np
 
 from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import FaultState
-from bearing_common.units import MAX_SAMPLE_RATE
+from bearing_common.units import sample_rate_problem
 from bearing_observer.model_sets import NONE, SHIPPED
 
 from . import kernels
@@ -144,8 +144,9 @@ class Diagnoser:
         if h is None:
             raise ValueError(f"unexpected hypothesis {FaultState(hypothesis).label}; "
                              f"expected {[x.label for x in STREAMS]}")
-        if not (sample_rate and math.isfinite(sample_rate) and 0 < sample_rate <= MAX_SAMPLE_RATE):
-            raise ValueError(f"sample_rate must be in (0, {MAX_SAMPLE_RATE:g}] Hz, got {sample_rate}")
+        rate_problem = sample_rate_problem(sample_rate)
+        if rate_problem:
+            raise ValueError(rate_problem)
         shipped = SHIPPED.get(self.model_set)
         if self.config.method == "fold" and shipped and not math.isclose(sample_rate, shipped.sample_rate):
             raise ValueError(f"model set {self.model_set} decides {shipped.sample_rate:g} Hz streams, "

@@ -7,6 +7,7 @@ stale timeout is marked stale (its diagnoser stopped deciding: no input, a dead 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from bearing_common import topics
@@ -48,7 +49,17 @@ class FleetTable:
         self._rows.setdefault(motor, MotorRow(motor, FaultState.NORMAL, 0.0, 0.0, 0.0, float("-inf")))
 
     def update(self, motor: str, state: int, confidence: float, onset: float, stamp: float, now: float) -> bool:
-        """A decision of ``motor``; True when its state changed."""
+        """A decision of ``motor``; True when its state changed.
+
+        Raises ValueError (one line, the table unchanged) for a state that is not a
+        :class:`FaultState`, a confidence outside [0, 1] or non-finite times.
+        """
+        if state not in FaultState._value2member_map_:
+            raise ValueError(f"{motor or '/'}: unknown state {state!r}")
+        if not 0.0 <= confidence <= 1.0:
+            raise ValueError(f"{motor or '/'}: confidence {confidence!r} outside [0, 1]")
+        if not all(math.isfinite(t) for t in (onset, stamp)):
+            raise ValueError(f"{motor or '/'}: non-finite onset or stamp ({onset!r}, {stamp!r})")
         old = self._rows.get(motor)
         self._rows[motor] = MotorRow(motor, FaultState(state), float(confidence), onset, stamp, now)
         return old is None or old.state != FaultState(state) or old.received == float("-inf")

@@ -12,6 +12,7 @@ import sys
 from rclpy.node import Node
 
 from bearing_common import topics
+from bearing_common.log_throttle import LogThrottle
 from bearing_common.node_main import run_node_main
 from bearing_common.parameters import declare
 from bearing_common.stamps import to_seconds, to_stamp
@@ -32,6 +33,8 @@ class FleetNode(Node):
         self.table = FleetTable(self.values["stale_timeout"])
         self.pub = self.create_publisher(FleetState, topics.FLEET_STATE.name, topics.qos(topics.FLEET_STATE))
         self.subscribed: set[str] = set()
+        self.rejected = 0
+        self._log_repeatable = LogThrottle(self._log, 5.0)
         self.create_timer(float(self.values["discovery_period"]), self.discover)
         self.create_timer(float(self.values["period"]), self.publish)
         self.discover()
@@ -39,6 +42,9 @@ class FleetNode(Node):
     def _on_change(self, changed: dict) -> None:
         if "stale_timeout" in changed:
             self.table.stale_timeout = float(changed["stale_timeout"])
+
+    def _log(self, level: str, text: str) -> None:
+        getattr(self.get_logger(), level)(text)
 
     def _now(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
@@ -55,8 +61,14 @@ class FleetNode(Node):
             self.get_logger().info(f"watching motor {motor or '/'} ({name})")
 
     def on_state(self, motor: str, msg: FaultState) -> None:
-        if self.table.update(motor, msg.state, msg.confidence, to_seconds(msg.onset), to_seconds(msg.header.stamp),
-                             self._now()):
+        try:
+            changed = self.table.update(motor, msg.state, msg.confidence, to_seconds(msg.onset),
+                                        to_seconds(msg.header.stamp), self._now())
+        except ValueError as exc:
+            self.rejected += 1
+            self._log_repeatable("rejected", "warning", f"ignoring fault_state ({self.rejected} so far): {exc}")
+            return
+        if changed:
             self.publish()
 
     def publish(self) -> None:

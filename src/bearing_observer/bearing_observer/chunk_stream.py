@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bearing_common.units import MAX_SAMPLE_RATE
+from bearing_common.units import sample_rate_problem
 
 MAX_CHUNK_SAMPLES = 2_000_000  # > 1 s at 1 MHz; larger chunks are refused as malformed
 
@@ -98,8 +98,9 @@ class ChunkStream:
         return Verdict(True, resync=resync, reason=reason, restart=restarted or rate_changed)
 
     def _problem(self, stamp, sample_rate, samples, n) -> str:
-        if not np.isfinite(sample_rate) or sample_rate <= 0 or sample_rate > MAX_SAMPLE_RATE:
-            return f"invalid sample rate: {sample_rate!r} Hz"
+        rate_problem = sample_rate_problem(sample_rate)
+        if rate_problem:
+            return rate_problem
         if self.sample_rate is not None and abs(sample_rate - self.sample_rate) > 1e-9 * self.sample_rate:
             return f"wrong sample rate: {sample_rate:g} Hz, expected {self.sample_rate:g} Hz"
         if n == 0:

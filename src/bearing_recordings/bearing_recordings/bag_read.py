@@ -26,6 +26,7 @@ import numpy as np
 
 from bearing_common import topics
 from bearing_common.stamps import to_seconds
+from bearing_common.units import sample_rate_problem
 
 from .bag_types import CUSTOM_BEARING, CUSTOM_NAMESPACE, BagError, project_typestore
 from .recording import MAX_SAMPLES, Recording
@@ -338,8 +339,8 @@ def join_chunks(chunks: list) -> Stream:
         listed = ", ".join(f"{r:g}" for r in sorted(rates))
         raise BagError(f"vibration chunks have different sample rates ({listed} Hz)")
     rate = rates.pop()
-    if not (np.isfinite(rate) and rate > 0):
-        raise BagError(f"vibration chunks carry an invalid sample rate {rate!r}")
+    if sample_rate_problem(rate):
+        raise BagError(f"vibration chunks: {sample_rate_problem(rate)}")
     sources = {c.source for c in chunks}
     if len(sources) > 1:
         raise BagError(f"vibration chunks come from several sources ({', '.join(sorted(sources))})")

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bearing_common.units import MAX_SAMPLE_RATE
+from bearing_common.units import sample_rate_problem
 
 #: Longest recording a loader accepts (samples): 1 hour at 100 kHz (2.9 GB as float64).
 MAX_SAMPLES = 360_000_000
@@ -69,15 +69,14 @@ class Recording:
 
 
 def check_rate(rate, what: str = "sample rate") -> float:
-    """A positive, finite number of Hz, else :class:`InputError`."""
+    """A plausible number of Hz (:func:`bearing_common.units.sample_rate_problem`), else :class:`InputError`."""
     try:
         rate = float(rate)
     except (TypeError, ValueError):
         raise InputError(f"invalid {what} {rate!r}") from None
-    if not math.isfinite(rate) or rate <= 0:
-        raise InputError(f"{what} must be a positive number of Hz, got {rate:g}")
-    if rate > MAX_SAMPLE_RATE:
-        raise InputError(f"{what} {rate:g} Hz is not plausible (above {MAX_SAMPLE_RATE:g} Hz)")
+    problem = sample_rate_problem(rate)
+    if problem:
+        raise InputError(problem.replace("sample rate", what, 1))
     return rate
 
 
