@@ -97,16 +97,18 @@ def diagnose_figures(recording: pathlib.Path, out: pathlib.Path, keep=None, pref
 class WindowView:
     """One analysis window as a spectral decision saw it.
 
-    ``evidence``: the engine's own; ``terms``: the comb it tested per hypothesis ((c, d, carrier)
-    rows, term frequency (c·ρ + d)·fr); ``f`` (Hz) and ``z``: the normalised squared envelope
-    spectrum (dimensionless, Exp(1) under Gaussian noise); ``log10p_all``: per hypothesis, the
-    comb before ambiguous terms were dropped (what it would have shown had it been tested).
+    ``window``: the engine's evidence; ``terms``: the comb it tested per hypothesis ((c, d, carrier)
+    rows, term frequency (c·ρ + d)·fr), over the scale range ``rho``; ``f`` (Hz) and ``z``: the
+    normalised squared envelope spectrum (dimensionless, Exp(1) under Gaussian noise);
+    ``log10p_all``: per hypothesis, the comb before ambiguous terms were dropped (what it would
+    have shown had it been tested).
     """
 
     name: str
     settings: SpectralSettings
-    evidence: WindowEvidence
+    window: WindowEvidence
     terms: dict
+    rho: tuple[float, float]
     f: np.ndarray
     z: np.ndarray
     log10p_all: dict
@@ -140,54 +142,57 @@ def window_view(name: str, x: np.ndarray, fs: float, bearing: Bearing, rpm: floa
     if any(not np.isclose(lp, w.evidence[h].log10p) for h, lp in evidence(engine.terms).items()):
         raise RuntimeError(f"{name}: the recomputed spectrum does not give the engine's evidence")
     full = evidence(comb_terms(bearing, fundamental_only=settings.fundamental_only))
-    return WindowView(name, settings, w, engine.terms, np.arange(z.shape[1]) * df, z[0], full)
+    return WindowView(name, settings, w, engine.terms, engine.rho, np.arange(z.shape[1]) * df, z[0], full)
 
 
 def _pvalues(view: WindowView) -> str:
-    """'outer race 0.0, inner race -35.3 (...), ball -0.2': log10 p per hypothesis, noting untested combs."""
+    """'outer race 0.0, inner race -35.3, ball 0.0 (untested; -0.1 if tested)': log10 p per hypothesis."""
     parts = []
     for h in HYPOTHESES:
-        e = view.evidence.evidence[h]
-        note = "" if e.terms else f" (no line tested; tested anyway {view.log10p_all[h]:.1f})"
+        e = view.window.evidence[h]
+        note = "" if e.terms else f" (untested; {view.log10p_all[h]:.1f} if tested)"
         parts.append(f"{h.label.replace('_', ' ')} {e.log10p:.1f}{note}")
     return ", ".join(parts)
 
 
 def spectrum_panel(ax, view: WindowView, bearing: Bearing, pfa: float, fs: float, f_max: float) -> None:
-    """Normalised SES of ``view`` up to ``f_max`` Hz with the inner-race comb it tested, the outer-race
-    comb dashed and the shaft harmonics grey; title: window, band, speed, log10 p per hypothesis."""
-    w = view.evidence
+    """Normalised SES of ``view`` up to ``f_max`` Hz with the inner-race comb (dotted where not tested),
+    the outer-race comb dashed and the shaft harmonics grey; title: window, band, speed, log10 p."""
+    w = view.window
     fr = w.speed_hz
     ir, outer = w.evidence[FaultState.INNER_RACE], w.evidence[FaultState.OUTER_RACE]
     tested = {tuple(t) for t in view.terms[FaultState.INNER_RACE]}
     for m in range(1, int(f_max / fr) + 1):
-        ax.axvline(m * fr, color="0.75", lw=1.0, zorder=1)
+        ax.axvline(m * fr, color="0.8", lw=1.0, zorder=1)
     for k in range(1, N_HARMONICS + 2):
         ax.axvline(k * bearing.orders().bpfo * outer.rho * fr, color="tab:blue", ls="--", lw=1.0, zorder=1)
     for row in comb_terms(bearing)[FaultState.INNER_RACE]:
         c, d, carrier = row
-        ax.axvline((c * ir.rho + d) * fr, color="tab:red", lw=1.6 if carrier else 0.9,
-                   ls="-" if tuple(row) in tested else ":", alpha=0.8, zorder=2)
+        ax.axvline((c * ir.rho + d) * fr, color="tab:red" if carrier else "tab:orange", lw=1.6 if carrier else 1.2,
+                   ls="-" if tuple(row) in tested else ":", zorder=2)
     shown = view.f <= f_max
     ax.plot(view.f[shown], view.z[shown], color="k", lw=0.8, zorder=3)
     ax.set_xlim(0.0, f_max)
-    ax.set_ylim(0.0, 1.1 * view.z[shown].max())
+    ax.set_ylim(0.0, 1.5 * view.z[shown].max())  # room for the legend
     ax.set_ylabel("normalised SES (÷ running median · ln 2)")
     label, _, _ = label_window({h: e.log10p for h, e in w.evidence.items()}, pfa)
     ax.set_title(f"{view.name}: window {w.start / fs:.3f}-{w.end / fs:.3f} s ({(w.end - w.start) / fs:.3f} s), "
                  f"band {w.band.low / 1e3:.2f}-{w.band.high / 1e3:.2f} kHz, shaft {fr:.2f} Hz ({w.speed_source})\n"
                  f"log10 p: {_pvalues(view)}; significant below {significance_level(pfa, len(HYPOTHESES)):.1f} "
                  f"→ {label.label}", fontsize=9)
+    rho = f"ρ = {ir.rho:.4f}, best match" if ir.terms else "ρ = 1, kinematic"
+    untested = f"within the ρ search {view.rho[0]:.3f}-{view.rho[1]:.3f} of another fault's line"
+    if view.settings.fundamental_only:
+        untested = "harmonics and sidebands are not in its comb" + ("" if ir.terms else f";\nBPFI: {untested}")
     masked = "masked" if view.settings.mask_shaft else "not masked"
     ax.legend(handles=[
-        Line2D([], [], color="k", lw=0.8, label="normalised SES (noise: mean 1)"),
-        Line2D([], [], color="tab:red", lw=1.6, label=f"k·BPFI·ρ, tested (ρ = {ir.rho:.4f})"),
-        Line2D([], [], color="tab:red", lw=0.9, label="k·BPFI·ρ ± fr, tested"),
-        Line2D([], [], color="tab:red", lw=0.9, ls=":",
-               label="not tested: within the ρ search of another fault's line"),
+        Line2D([], [], color="k", lw=0.8, label="normalised SES (Gaussian noise: mean 1)"),
+        Line2D([], [], color="tab:red", lw=1.6, label=f"k·BPFI·ρ, inner race ({rho})"),
+        Line2D([], [], color="tab:orange", lw=1.2, label="k·BPFI·ρ ± fr"),
+        Line2D([], [], color="tab:red", lw=1.2, ls=":", label=f"dotted: not tested ({untested})"),
         Line2D([], [], color="tab:blue", lw=1.0, ls="--", label=f"k·BPFO·ρ, outer race (ρ = {outer.rho:.4f})"),
-        Line2D([], [], color="0.75", lw=1.0, label=f"shaft harmonics m·fr ({masked})"),
-    ], loc="upper right", fontsize=7.5, framealpha=0.9)
+        Line2D([], [], color="0.8", lw=1.0, label=f"shaft harmonics m·fr ({masked})"),
+    ], loc="upper right", fontsize=7.5, framealpha=0.95)
 
 
 def real_machine_figures(out: pathlib.Path) -> None:
@@ -200,16 +205,15 @@ def real_machine_figures(out: pathlib.Path) -> None:
     rec = entry.load()
     bearing = load_bearing(entry.bearing)
     config = config_for(choose_model_set(rec, bearing).name)
+    f_max = (N_HARMONICS * bearing.orders().bpfi + 1.5) * rec.rpm / 60.0  # Hz: 3·BPFI and its upper sideband
     ours = window_view("our decision (prewhitened, band chosen by the fault evidence)", rec.accel, rec.sample_rate,
-                       bearing, rec.rpm, config.spectral, WINDOW_AT_S)
-    f_top = ours.f[-1]
+                       bearing, rec.rpm, config.spectral, WINDOW_AT_S, f_max)
     baseline = window_view("textbook baseline (no prewhitening, kurtogram band, fundamentals only)", rec.accel,
-                           rec.sample_rate, bearing, rec.rpm, envelope_baseline(config).spectral, WINDOW_AT_S, f_top)
-    f_max = (N_HARMONICS * bearing.orders().bpfi + 1.5) * rec.rpm / 60.0  # 3·BPFI and its upper sideband
+                           rec.sample_rate, bearing, rec.rpm, envelope_baseline(config).spectral, WINDOW_AT_S, f_max)
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(11, 8.5))
     for ax, view in zip(axes, (ours, baseline)):
         spectrum_panel(ax, view, bearing, config.pfa, rec.sample_rate, f_max)
-        print(f"{REAL_PREFIX}: {entry.path.name}, {view.name}: samples {view.evidence.start}-{view.evidence.end}, "
+        print(f"{entry.path.name}, {view.name}: samples {view.window.start}-{view.window.end}, "
               f"log10 p {_pvalues(view)}")
     axes[-1].set_xlabel("envelope frequency (Hz)")
     fig.suptitle(f"MFPT {entry.path.stem} ({entry.note}, {rec.rpm:g} rpm told): what one analysis window shows",
