@@ -3,9 +3,9 @@
 Runs :mod:`bearing_diagnoser.accuracy` on ``benchmarks/shared_data.yaml`` (the recordings in
 ../shared/data or $BEARING_DATA_DIR) with the decision and the textbook envelope baseline,
 then the decision with one block changed at a time (prewhitening off, fundamental only, no
-slip search, no shaft-harmonic mask, the speed as told without refinement, the kurtogram's
-band instead of the evidence-chosen one) and with the speed not told (estimated from the
-vibration), and writes ``out/accuracy.md``.
+slip search, no dropping of ambiguous lines, no shaft-harmonic mask, the speed as told
+without refinement, the kurtogram's band instead of the evidence-chosen one) and with the
+speed not told (estimated from the vibration), and writes ``out/accuracy.md``.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ VARIANTS = {
     "no prewhitening": _spectral(prewhiten=False),
     "fundamental only (no harmonics, no sidebands)": _spectral(fundamental_only=True),
     "no slip search": _spectral(slip_search=False),
+    "no ambiguity drop (a line two hypotheses could match counts for both)": _spectral(drop_ambiguous=False),
     "no shaft-harmonic mask": _spectral(mask_shaft=False),
     "speed as told (no refinement)": _spectral(refine_speed=False),
     "kurtogram band (most impulsive) instead of the evidence-chosen one": _spectral(band_criterion="kurtogram"),

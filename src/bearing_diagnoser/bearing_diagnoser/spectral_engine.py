@@ -45,6 +45,9 @@ class SpectralSettings:
         refinement of a told speed from the vibration.
     fundamental_only : bool
         Test the fundamental of each fault frequency only (no harmonics, no sidebands).
+    drop_ambiguous : bool
+        Leave out terms two hypotheses could both match over the slip search
+        (:func:`.fault_lines.drop_ambiguous`); off, such a line counts for both.
     buffer_s, reselect_s : float
         Seconds of recent data the speed and band are estimated on, and how often (s).
     told_tolerance : float
@@ -65,6 +68,7 @@ class SpectralSettings:
     mask_shaft: bool = True
     refine_speed: bool = True
     fundamental_only: bool = False
+    drop_ambiguous: bool = True
     buffer_s: float = 2.0
     reselect_s: float = 1.0
     told_tolerance: float = 0.02
@@ -75,9 +79,10 @@ class SpectralSettings:
 
 
 #: The textbook baseline (Randall & Antoni 2011): the squared envelope spectrum of the kurtogram's
-#: band, read at the fundamental fault frequencies (± slip) with the speed as told.
+#: band, read at each fundamental fault frequency (± slip) with the speed as told, whatever
+#: other line lies near it.
 BASELINE = SpectralSettings(prewhiten=False, mask_shaft=False, refine_speed=False, fundamental_only=True,
-                            band_criterion="kurtogram")
+                            drop_ambiguous=False, band_criterion="kurtogram")
 
 
 @dataclass(frozen=True)
@@ -154,7 +159,7 @@ class SpectralEngine:
         self.hop = self.window // 2
         self.rho = rho_range(sigma / fr, s.slip_search)
         terms = comb_terms(self.bearing, fundamental_only=s.fundamental_only)
-        self.terms = drop_ambiguous(terms, self.rho[1] - self.rho[0])
+        self.terms = drop_ambiguous(terms, self.rho[1] - self.rho[0]) if s.drop_ambiguous else terms
         self.f_top = highest_term(terms, self.rho[1]) * fr
         self._geometry_for = fr
 
