@@ -131,9 +131,13 @@ def window_view(name: str, x: np.ndarray, fs: float, bearing: Bearing, rpm: floa
     engine, windows = run(chosen.end)
     w = windows[-1]
     seg = x[w.start:w.end]
-    ses, df = band_ses(window_spectrum(seg, settings.prewhiten), seg.size, fs, np.array([[w.band.low, w.band.high]]),
-                       max(engine.f_top, f_max or 0.0))
-    z = normalise(ses)
+    spectrum = window_spectrum(seg, settings.prewhiten)
+
+    def normalised_ses(f_top: float):
+        ses, df = band_ses(spectrum, seg.size, fs, np.array([[w.band.low, w.band.high]]), f_top)
+        return normalise(ses), df
+
+    z, df = normalised_ses(engine.f_top)  # as the engine computed it (the running median depends on the length)
 
     def evidence(terms: dict) -> dict:
         found = comb_evidence(z, df, w.speed_hz, terms, engine.rho, settings.mask_shaft, w.band.candidates)
@@ -142,7 +146,8 @@ def window_view(name: str, x: np.ndarray, fs: float, bearing: Bearing, rpm: floa
     if any(not np.isclose(lp, w.evidence[h].log10p) for h, lp in evidence(engine.terms).items()):
         raise RuntimeError(f"{name}: the recomputed spectrum does not give the engine's evidence")
     full = evidence(comb_terms(bearing, fundamental_only=settings.fundamental_only))
-    return WindowView(name, settings, w, engine.terms, engine.rho, np.arange(z.shape[1]) * df, z[0], full)
+    shown, df = normalised_ses(max(engine.f_top, f_max or 0.0))
+    return WindowView(name, settings, w, engine.terms, engine.rho, np.arange(shown.shape[1]) * df, shown[0], full)
 
 
 def _pvalues(view: WindowView) -> str:
