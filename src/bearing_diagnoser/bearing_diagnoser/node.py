@@ -82,7 +82,7 @@ class DiagnoserNode(Node):
     def publish_diagnostics(self) -> None:
         self._publish_health(self.session.health(self._now()))
 
-    def shutdown(self) -> None:
+    def on_shutdown(self) -> None:
         """Called by the node main while the context is still valid: a last status."""
         self._publish_health(self.session.final_health(self._now()))
 
