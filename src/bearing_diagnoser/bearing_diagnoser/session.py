@@ -12,12 +12,15 @@ What the node does between ROS and the decision core:
   (stamp of sample index 0 + index / rate), never from arrival;
 * health: the /diagnostics level and key-values — STALE when no residual arrived within
   the stale timeout, WARN when one observer is silent, when the sensor signal is unusable
-  (:mod:`.sensor_health`) or the state is UNKNOWN, ERROR for a fault, OK for NORMAL.
+  (:mod:`.sensor_health`) or the state is UNKNOWN, ERROR for a fault, OK for NORMAL —,
+  named ``bearing_monitor/<motor>/drive_end`` with the motor as hardware id, so that
+  ``diagnostic_aggregator`` groups a fleet's statuses (``config/diagnostic_aggregator.yaml``).
 """
 
 from __future__ import annotations
 
 import math
+import socket
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -37,6 +40,21 @@ from .state_tracker import Decision
 
 #: Fastest plausible shaft (rev/min): anything above is a broken speed source.
 MAX_RPM = 1e6
+
+#: /diagnostics status names: ``STATUS_PREFIX/<motor>/SENSOR_LOCATION``.
+STATUS_PREFIX = "bearing_monitor"
+SENSOR_LOCATION = "drive_end"
+
+
+def motor_name(parameter: str, namespace: str) -> str:
+    """The motor a diagnoser watches (its /diagnostics hardware id): the ``motor`` parameter,
+    else the node's namespace without the leading slash, else (root namespace) the host's name."""
+    return parameter or namespace.strip("/") or socket.gethostname()
+
+
+def status_name(motor: str) -> str:
+    """The /diagnostics status name of ``motor``'s bearing, e.g. ``bearing_monitor/motor_3/drive_end``."""
+    return f"{STATUS_PREFIX}/{motor}/{SENSOR_LOCATION}"
 
 
 @dataclass(frozen=True)
