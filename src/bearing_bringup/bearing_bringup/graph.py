@@ -1,7 +1,8 @@
 """The monitoring graph: which node executables run, under which names.
 
 One definition used by the launch file (``launch/monitor.launch.py``), the
-``bearing-graph`` starter of ``make demo`` and the launch/YAML checks in tests.
+``bearing-graph`` starter of ``make demo``, the multi-node processes (:mod:`.nodes_main`)
+and the launch/YAML checks in tests.
 """
 
 import pathlib
@@ -14,21 +15,28 @@ from bearing_common import ros_env
 class NodeSpec:
     """A node of the graph: ``ros2 run <package> <executable>`` named ``name``.
 
-    ``parameters_module`` holds the node's declared ``PARAMETERS`` (rclpy-free).
+    ``parameters_module`` holds the node's declared ``PARAMETERS`` (rclpy-free). ``node_class``
+    (``module:Class``, constructed as ``Class(name=..., namespace=...)``) lets a multi-node
+    process run the node; empty for a node with a run loop of its own (the simulator paces
+    itself), which runs only as its own executable.
     """
 
     package: str
     executable: str
     name: str
     parameters_module: str
+    node_class: str = ""
 
 
 #: Simulator -> OR and IR observers -> diagnoser (sim/truth is for evaluation only).
 GRAPH = (
     NodeSpec("bearing_sim", "simulator", "simulator", "bearing_sim.sim_node_config"),
-    NodeSpec("bearing_observer", "observer", "or_observer", "bearing_observer.observer_node_config"),
-    NodeSpec("bearing_observer", "observer", "ir_observer", "bearing_observer.observer_node_config"),
-    NodeSpec("bearing_diagnoser", "diagnoser", "diagnoser", "bearing_diagnoser.diagnoser_node_config"),
+    NodeSpec("bearing_observer", "observer", "or_observer", "bearing_observer.observer_node_config",
+             "bearing_observer.node:ObserverNode"),
+    NodeSpec("bearing_observer", "observer", "ir_observer", "bearing_observer.observer_node_config",
+             "bearing_observer.node:ObserverNode"),
+    NodeSpec("bearing_diagnoser", "diagnoser", "diagnoser", "bearing_diagnoser.diagnoser_node_config",
+             "bearing_diagnoser.node:DiagnoserNode"),
 )
 
 CONFIG_NAME = "monitor.yaml"

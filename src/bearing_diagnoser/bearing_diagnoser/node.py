@@ -31,8 +31,8 @@ from .session import DiagnoserSession, Health, StateReport, motor_name, status_n
 class DiagnoserNode(Node):
     """Thin adapter: Residual chunks -> DiagnoserSession -> FaultState and /diagnostics."""
 
-    def __init__(self):
-        super().__init__("diagnoser")
+    def __init__(self, name: str = "diagnoser", namespace: str | None = None):
+        super().__init__(name, namespace=namespace)
         self.values = declare(self, PARAMETERS, on_change=lambda changed: self.session.configure(changed))
         self.session = DiagnoserSession(self.values, self._log)
         self.motor = motor_name(self.values["motor"], self.get_namespace())
