@@ -29,9 +29,7 @@ POLL_S = 0.1  #: s, longest a stop request waits for the default spin to notice 
 
 def spin_until(nodes, stop) -> None:
     """The default run: execute the callbacks of ``nodes`` (a list, one executor) until ``stop`` is true."""
-    from rclpy.executors import SingleThreadedExecutor
-
-    executor = SingleThreadedExecutor()
+    executor = event_executor()
     for node in nodes:
         executor.add_node(node)
     try:
@@ -39,6 +37,21 @@ def spin_until(nodes, stop) -> None:
             executor.spin_once(timeout_sec=POLL_S)
     finally:
         executor.shutdown()
+
+
+def event_executor(context=None):
+    """rclpy's EventsExecutor (``rclpy.experimental``: a C++ event queue), or the SingleThreadedExecutor
+    where an rclpy lacks it.
+
+    The nodes' CPU goes mostly into taking and publishing messages (100 chunks/s per motor);
+    the Python executor rebuilds its wait set for every callback. With this one, 2 motors at
+    48 kHz (benchmarks/fleet_benchmarks.py) took 0.23 instead of 0.32 cores in the observers'
+    process, 0.21 instead of 0.34 in the diagnosers' and 0.07 instead of 0.11 in the fleet node."""
+    try:
+        from rclpy.experimental import EventsExecutor
+    except ImportError:  # an older rclpy of a full ROS 2 install
+        from rclpy.executors import SingleThreadedExecutor as EventsExecutor
+    return EventsExecutor(context=context)
 
 
 def run_node_main(program: str, make_node, run=None, args=None) -> int:
