@@ -30,6 +30,7 @@ MODULES = (
     "benchmarks.diag_benchmarks",
     "benchmarks.bag_benchmarks",
     "benchmarks.graph_benchmarks",
+    "benchmarks.fleet_benchmarks",
 )
 
 

@@ -20,7 +20,7 @@ from bearing_common.units import STANDARD_GRAVITY as G
 from bearing_recordings import bag_cli
 from bearing_recordings.bag_read import Chunk, StateSample, join_chunks, load_bag, read_bag, truth_per_sample
 from bearing_recordings.bag_types import BagError, project_typestore
-from bearing_recordings.bag_write import BagWriter, recording_to_bag
+from bearing_recordings.bag_write import BagWriter, recording_to_bag, write_signals_bag
 from bearing_recordings.load import load_recording
 from bearing_recordings.mat_files import load_mat
 
@@ -197,6 +197,17 @@ def test_namespaced_topics_are_found_and_ambiguity_is_an_error(tmp_path):
         read_bag(tmp_path / "bag")
     assert read_bag(tmp_path / "bag", namespace="m2").namespace == "m2"
     assert len(read_bag(tmp_path / "bag", namespace="/m1").chunks) == 1
+
+
+def test_one_bag_holds_several_motors_each_in_its_namespace(tmp_path):
+    fs = 1000.0
+    signals = {"motor_1": np.arange(25.0), "motor_2": -np.arange(12.0)}
+    assert write_signals_bag(tmp_path / "bag", signals, fs, 1800.0, "simulator", chunk_duration=0.01) == 3
+    for motor, x in signals.items():
+        contents = read_bag(tmp_path / "bag", namespace=motor)
+        assert [c.first_sample_index for c in contents.chunks] == list(range(0, x.size, 10))
+        assert_array_equal(np.concatenate([c.samples for c in contents.chunks]), x)
+        assert len(contents.speeds) == len(contents.chunks)
 
 
 # ----------------------------------------------------------------------------------------

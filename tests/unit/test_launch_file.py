@@ -1,9 +1,10 @@
-"""The launch file, built for real against stand-in launch modules, and the graph's parameters YAML.
+"""The launch files, built for real against stand-in launch modules, and the graph's parameters YAML.
 
 ``launch`` / ``launch_ros`` are not installable here (no PyPI packages), so minimal stand-ins
 with the real call signatures (keyword names checked: a misspelt or unknown argument is a
 TypeError, as it would be in launch) are put in ``sys.modules``; they record what the launch
-file passes, and the test checks it against ``bearing_bringup.graph.GRAPH``.
+files pass, and the tests check it against ``bearing_bringup.graph.GRAPH`` and, for the
+fleet, against the processes ``bearing_bringup.fleet`` plans (what ``bearing-graph --fleet`` runs).
 """
 
 import importlib
@@ -16,12 +17,14 @@ import types
 import pytest
 import yaml
 
-from bearing_bringup.graph import CONFIG_NAME, GRAPH
+from bearing_bringup.fleet import load_fleet, parameters_file, processes
+from bearing_bringup.graph import CONFIG_NAME, FLEET_CONFIG_NAME, GRAPH
 from bearing_bringup.restart_policy import MAX_RESTARTS, RESTART_DELAY_S
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 BRINGUP = REPO / "src" / "bearing_bringup"
 LAUNCH_FILE = BRINGUP / "launch" / "monitor.launch.py"
+FLEET_LAUNCH_FILE = BRINGUP / "launch" / "fleet.launch.py"
 
 #: ExecuteProcess / ExecuteLocal / Action keyword arguments that launch_ros' Node passes on.
 EXECUTE_KWARGS = {"shell", "sigterm_timeout", "sigkill_timeout", "emulate_tty", "output", "output_format",
@@ -55,6 +58,11 @@ class Shutdown(Recorded):
         super().__init__(reason=reason)
 
 
+class OpaqueFunction(Recorded):
+    def __init__(self, *, function, args=None, kwargs=None):
+        super().__init__(function=function, args=args, kwargs=kwargs)
+
+
 class LaunchConfiguration(Recorded):
     def __init__(self, variable_name, *, default=None):
         super().__init__(variable_name=variable_name, default=default)
@@ -67,7 +75,7 @@ class Node(Recorded):
         if unknown:
             raise TypeError(f"Node() got unexpected keyword arguments {sorted(unknown)}")
         super().__init__(executable=executable, package=package, name=name, namespace=namespace,
-                         parameters=parameters, **kwargs)
+                         parameters=parameters, remappings=remappings, arguments=arguments, **kwargs)
 
 
 def stand_in_modules(share: pathlib.Path) -> dict:
@@ -82,7 +90,8 @@ def stand_in_modules(share: pathlib.Path) -> dict:
 
     return {
         "launch": module("launch", LaunchDescription=LaunchDescription),
-        "launch.actions": module("launch.actions", DeclareLaunchArgument=DeclareLaunchArgument, Shutdown=Shutdown),
+        "launch.actions": module("launch.actions", DeclareLaunchArgument=DeclareLaunchArgument, Shutdown=Shutdown,
+                                 OpaqueFunction=OpaqueFunction),
         "launch.substitutions": module("launch.substitutions", LaunchConfiguration=LaunchConfiguration),
         "launch_ros": module("launch_ros"),
         "launch_ros.actions": module("launch_ros.actions", Node=Node),
@@ -92,14 +101,18 @@ def stand_in_modules(share: pathlib.Path) -> dict:
     }
 
 
-@pytest.fixture
-def description(monkeypatch):
+def launch_description(monkeypatch, path):
     for name, mod in stand_in_modules(BRINGUP).items():
         monkeypatch.setitem(sys.modules, name, mod)
-    spec = importlib.util.spec_from_file_location("monitor_launch", LAUNCH_FILE)
+    spec = importlib.util.spec_from_file_location(path.stem.replace(".", "_"), path)
     launch_file = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(launch_file)
     return launch_file.generate_launch_description()
+
+
+@pytest.fixture
+def description(monkeypatch):
+    return launch_description(monkeypatch, LAUNCH_FILE)
 
 
 def test_launch_arguments(description):
@@ -164,3 +177,28 @@ def test_every_parameter_has_a_description():
     for spec in GRAPH:
         for param in importlib.import_module(spec.parameters_module).PARAMETERS:
             assert len(param.description) > 10, f"{spec.name}.{param.name} lacks a description"
+
+
+def test_fleet_launch_starts_the_processes_bearing_graph_runs(monkeypatch, tmp_path):
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    entities = launch_description(monkeypatch, FLEET_LAUNCH_FILE).kwargs["initial_entities"]
+    args = {e.kwargs["name"]: e.kwargs for e in entities if isinstance(e, DeclareLaunchArgument)}
+    assert set(args) == {"fleet_file", "motors"} and args["motors"]["default_value"] == ""
+    fleet_file = pathlib.Path(args["fleet_file"]["default_value"])
+    assert fleet_file == BRINGUP / "config" / FLEET_CONFIG_NAME and fleet_file.is_file()
+    (opaque,) = [e for e in entities if isinstance(e, OpaqueFunction)]
+    context = types.SimpleNamespace(launch_configurations={"fleet_file": str(fleet_file), "motors": "5"})
+    nodes = [n.kwargs for n in opaque.kwargs["function"](context)]
+
+    fleet = load_fleet(fleet_file, 5)
+    planned = processes(fleet)
+    assert [(n["package"], n["executable"], n["name"], n["namespace"] or "", tuple(n["arguments"]),
+             tuple(n["remappings"])) for n in nodes] == [
+        (p.package, p.executable, p.node_name, p.namespace, p.arguments, p.remappings) for p in planned]
+    (params,) = {n["parameters"][0] for n in nodes}
+    assert yaml.safe_load(pathlib.Path(params).read_text()) == parameters_file(fleet)
+    for node, proc in zip(nodes, planned):
+        if proc.sensor:  # a simulator ends with its scenario; the rest keeps monitoring
+            assert not node.get("respawn") and "on_exit" not in node
+        else:
+            assert node["respawn"] is True and node["respawn_delay"] == RESTART_DELAY_S

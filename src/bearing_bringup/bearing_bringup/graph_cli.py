@@ -8,8 +8,16 @@ that dies meanwhile is restarted after a delay (:mod:`.restart_policy`; a crash 
 stops the graph). It then writes a summary against the simulator's ground truth and
 plots to ``--out``.
 
+With ``--fleet FILE`` or ``--motors N`` it runs a fleet instead (:mod:`.fleet`): every
+motor's graph in its own namespace, its processes laid out as the fleet file says, plus
+the ``fleet`` node; the parameters every node got are written to ``--out``/fleet_params.yaml,
+the restart policy applies per process, the run ends when every simulator has ended its
+scenario (without simulators: on Ctrl-C or ``--timeout``), and the summary has one table
+per simulated motor (``--out``/<motor>/ holds its summary and plot).
+
 Exit 0 only when every node of the graph ran and the scenario completed; when
-parts are missing it runs what exists, names what is missing and exits 3.
+parts are missing it runs what exists, names what is missing and exits 3; an
+unusable fleet file gives one line on stderr and exit 2.
 """
 
 from __future__ import annotations
@@ -23,10 +31,13 @@ import signal
 import sys
 import time
 
+import yaml
+
 from bearing_common import ros_env
 from bearing_common.stop_signals import StopSignals
 
-from .graph import CONFIG_NAME, GRAPH, config_path
+from .fleet import FleetError, default_fleet_file, load_fleet, parameters_file, processes
+from .graph import CONFIG_NAME, config_path, single_graph
 from .process_group import ProcessGroup
 from .restart_policy import MAX_RESTARTS, RESTART_DELAY_S, RestartPolicy
 from .state_report import evaluate, format_table
@@ -34,7 +45,9 @@ from .state_report import evaluate, format_table
 SIMULATOR = "simulator"  # the node whose exit 0 ends the scenario
 EXIT_MISSING = 3
 EXIT_FAILED = 1
+EXIT_BAD_FLEET = 2
 MISSING_SIMULATOR_RUN_S = 5.0
+FLEET_PARAMS = "fleet_params.yaml"
 
 
 def installed_executable(package: str, executable: str) -> pathlib.Path | None:
@@ -42,29 +55,32 @@ def installed_executable(package: str, executable: str) -> pathlib.Path | None:
     return ros_env.executable(package, executable)
 
 
-def missing_parts() -> list:
-    """Names of graph nodes whose executable or node module is not there."""
+def missing_parts(procs=None) -> list:
+    """Names of processes (default: one graph's) whose executable or node module is not there."""
     missing = []
-    for spec in GRAPH:
-        if installed_executable(spec.package, spec.executable) is None:
-            missing.append(f"{spec.name} ({spec.package}/{spec.executable}: executable not built)")
-        elif importlib.util.find_spec(f"{spec.package}.node") is None:
-            missing.append(f"{spec.name} ({spec.package}.node: module missing)")
+    for proc in single_graph() if procs is None else procs:
+        if installed_executable(proc.package, proc.executable) is None:
+            missing.append(f"{proc.name} ({proc.package}/{proc.executable}: executable not built)")
+        elif proc.node_name and importlib.util.find_spec(f"{proc.package}.node") is None:
+            missing.append(f"{proc.name} ({proc.package}.node: module missing)")
     return missing
 
 
-def node_argv(spec, params_file: pathlib.Path, namespace: str) -> list:
-    argv = [str(installed_executable(spec.package, spec.executable)), "--ros-args",
-            "-r", f"__node:={spec.name}", "--params-file", str(params_file)]
-    if namespace:
-        argv += ["-r", f"__ns:=/{namespace.strip('/')}"]
-    return argv
+def process_argv(proc, params_file: pathlib.Path) -> list:
+    """The command line of ``proc`` (a :class:`~bearing_bringup.graph.Process`)."""
+    return [str(installed_executable(proc.package, proc.executable)), *proc.arguments,
+            *proc.ros_arguments(params_file)]
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="bearing-graph", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--params", type=pathlib.Path, help=f"parameters YAML (default: the installed {CONFIG_NAME})")
+    parser.add_argument("--params", type=pathlib.Path, help=f"parameters YAML (default: the installed {CONFIG_NAME}; "
+                        "with a fleet: the per-node base parameters)")
     parser.add_argument("--namespace", default="", help="namespace for all nodes, e.g. motor_7")
+    parser.add_argument("--fleet", type=pathlib.Path, help="run the fleet of this fleet YAML (default with --motors: "
+                        "the installed fleet.yaml)")
+    parser.add_argument("--motors", type=int, help="run N motors: the fleet file's first N, then motor_<k> on its "
+                        "defaults")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/demo"),
                         help="summary and plots directory")
     parser.add_argument("--timeout", type=float, default=600.0, help="stop after this many wall seconds")
@@ -77,49 +93,71 @@ def main(argv=None) -> int:
                         help="restarts of one node per minute before the graph stops (crash loop)")
     args = parser.parse_args(argv)
 
-    params_file = args.params or config_path()
+    fleet = None
+    if args.fleet or args.motors is not None:
+        try:
+            fleet = load_fleet(args.fleet or default_fleet_file(), args.motors, args.params)
+        except FleetError as exc:
+            print(f"bearing-graph: {exc}", file=sys.stderr)
+            return EXIT_BAD_FLEET
+        args.out.mkdir(parents=True, exist_ok=True)
+        params_file = args.out / FLEET_PARAMS
+        params_file.write_text(yaml.safe_dump(parameters_file(fleet), sort_keys=False))
+        procs, namespaces = processes(fleet), [m.name for m in fleet.motors]
+    else:
+        params_file = args.params or config_path()
+        procs, namespaces = single_graph(args.namespace), [args.namespace]
     if not params_file.is_file():
         print(f"bearing-graph: parameters file {params_file} not found", file=sys.stderr)
         return EXIT_FAILED
-    missing = missing_parts()
-    runnable = [s for s in GRAPH if not any(m.startswith(f"{s.name} ") for m in missing)]
+    missing = missing_parts(procs)
+    runnable = [p for p in procs if not any(m.startswith(f"{p.name} ") for m in missing)]
 
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # a demo stays on this machine
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # nodes solve small systems: BLAS threads only contend
     from .graph_watcher import GraphWatcher  # rclpy: imported only when the graph runs
 
     policy = RestartPolicy(args.restart_delay, args.max_restarts)
-    sim = failure = None
+    sensors = failure = None
     with StopSignals() as stop:
-        watcher = GraphWatcher(args.namespace)
+        watcher = GraphWatcher(namespaces)
         group = ProcessGroup(on_line=None)
-        watcher.on_change = lambda text: group.echo(text, "state")
+        watcher.on_change = lambda motor, text: group.echo(text, f"{motor} state" if fleet else "state")
         for part in missing:
             group.echo(f"MISSING: {part}")
         try:
-            for spec in runnable:
-                group.start(spec.name, node_argv(spec, params_file, args.namespace))
+            for proc in runnable:
+                group.start(proc.name, process_argv(proc, params_file))
             for member in group.members:
                 group.echo(f"started {member.name} (pid {member.process.pid})")
-            sim = next((m for m in group.members if m.name == SIMULATOR), None)
-            # Without a simulator nothing ends the scenario: show that the rest starts, then stop.
-            deadline = time.monotonic() + (args.timeout if sim is not None else MISSING_SIMULATOR_RUN_S)
-            failure = supervise(group, policy, deadline, stop)
+            sensors = [m for m, p in zip(group.members, runnable) if p.sensor]
+            # Without a simulator nothing ends the scenario: show that the rest starts, then stop
+            # (a fleet of external sensors runs until Ctrl-C or the timeout).
+            expected = any(p.sensor for p in procs)
+            deadline = time.monotonic() + (args.timeout if sensors or not expected else MISSING_SIMULATOR_RUN_S)
+            failure = supervise(group, policy, deadline, stop, [m.name for m in sensors])
             if failure:
                 group.echo(failure)
-            elif sim is not None and sim.returncode == 0:
+            elif sensors and all(m.returncode == 0 for m in sensors):
                 group.echo("scenario ended; waiting for the diagnoser to decide the last window")
-                if not watcher.wait_decided_to_end(args.settle, stop):
-                    group.echo(f"the diagnoser did not reach the end of the data within {args.settle:g} s")
+                simulated = [m.name for m in fleet.motors if m.simulated] if fleet else None
+                late = watcher.wait_decided_to_end(args.settle, stop, simulated)
+                if late:
+                    group.echo(f"the diagnoser did not reach the end of the data within {args.settle:g} s"
+                               + (f": {', '.join(late)}" if fleet else ""))
         finally:
             codes = group.stop()
             watcher.close()
 
     group.echo("exit codes: " + ", ".join(f"{name} {code}" for name, code in codes.items()))
-    completed = sim is not None and sim.returncode == 0 and not stop and failure is None
-    report = write_report(watcher, args.out, completed)
-    if report:
-        print(report, flush=True)
+    if sensors:
+        completed = all(m.returncode == 0 for m in sensors) and not stop and failure is None
+    else:
+        completed = bool(fleet) and failure is None  # external sensors: stopped on request or at the timeout
+    for motor, log in watcher.motors.items():
+        report = write_report(log, args.out / motor if fleet else args.out, completed)
+        if report and (log.truth_changes() or not fleet):
+            print((f"{motor}: " if fleet else "") + report, flush=True)
     if missing:
         print("bearing-graph: not runnable yet: " + "; ".join(missing), file=sys.stderr)
         return EXIT_MISSING
@@ -127,18 +165,24 @@ def main(argv=None) -> int:
     return 0 if completed and others_ok else EXIT_FAILED
 
 
-def supervise(group: ProcessGroup, policy: RestartPolicy, deadline: float, stop) -> str | None:
-    """Run until the simulator ends its scenario (exit 0), ``stop``, or ``deadline`` (monotonic
-    s), restarting nodes that die as ``policy`` says; return why the graph must stop otherwise."""
+def supervise(group: ProcessGroup, policy: RestartPolicy, deadline: float, stop,
+              scenario_ends=(SIMULATOR,)) -> str | None:
+    """Run until every process of ``scenario_ends`` (the simulators) has ended its scenario (exit 0;
+    never, when there are none), ``stop``, or ``deadline`` (monotonic s), restarting processes that
+    die as ``policy`` says; return why the graph must stop otherwise."""
     due = {}  # name -> monotonic time of its restart
+    ended = set()
     while time.monotonic() < deadline and not stop:
         now = time.monotonic()
         for member in group.members:
             code = member.returncode
-            if code is None or member.name in due:
+            if code is None or member.name in due or member.name in ended:
                 continue
-            if member.name == SIMULATOR and code == 0:
-                return None
+            if member.name in scenario_ends and code == 0:
+                ended.add(member.name)
+                if ended >= set(scenario_ends):
+                    return None
+                continue
             verdict = policy.after_exit(member.name, code, now)
             if not verdict.restart:
                 return verdict.message
@@ -153,14 +197,15 @@ def supervise(group: ProcessGroup, policy: RestartPolicy, deadline: float, stop)
     return None
 
 
-def write_report(watcher, out: pathlib.Path, completed: bool) -> str:
-    """Summary table against sim/truth and plots; returns the table text."""
-    out.mkdir(parents=True, exist_ok=True)
-    truth = watcher.truth_changes()
-    decided = watcher.state_changes(all_decisions=True)
-    end = watcher.signal_end()
+def write_report(log, out: pathlib.Path, completed: bool) -> str:
+    """Summary table of one motor (a :class:`~.graph_watcher.MotorLog`) against sim/truth and
+    plots, into ``out``; returns the table text."""
+    truth = log.truth_changes()
+    decided = log.state_changes(all_decisions=True)
+    end = log.signal_end()
     if not truth or end is None:
         return "no ground truth received: nothing to summarise"
+    out.mkdir(parents=True, exist_ok=True)
     results = evaluate(truth, decided, end)
     table = format_table(results)
     (out / "summary.md").write_text(
@@ -170,9 +215,9 @@ def write_report(watcher, out: pathlib.Path, completed: bool) -> str:
         "segments": [dict(true_state=r.true_state, start=r.start, end=r.end, detected_state=r.detected_state,
                           detected_at=r.detected_at, delay=r.delay, onset=r.onset, correct=r.correct)
                      for r in results],
-        "state_changes": [c.__dict__ for c in watcher.state_changes()],
+        "state_changes": [c.__dict__ for c in log.state_changes()],
     }, indent=2))
-    watcher.plot(out / "states.png", truth, decided, end)
+    log.plot(out / "states.png", truth, decided, end)
     return f"summary against ground truth (also in {out}/summary.md):\n{table}"
 
 

@@ -1,4 +1,11 @@
-"""An rclpy listener for ``bearing-graph``: fault states, ground truth and the vibration, for the report."""
+"""An rclpy listener for ``bearing-graph``: each motor's fault states, ground truth and vibration, for the report.
+
+One node in its own context watches the graphs of every namespace given (one motor per
+namespace, ``""`` = the root); :class:`MotorLog` keeps what one motor's graph published.
+A motor's vibration is subscribed only once its ground truth arrives (the simulator
+publishes it with the first chunk): until then the watcher is not counted among the
+subscribers the simulator's start waits for (``wait_for_subscribers``: the observers).
+"""
 
 from __future__ import annotations
 
@@ -24,55 +31,30 @@ QUEUE = 100  # subscription depth: every state change is kept, even when this th
 KEEP_SIGNAL_S = 60.0  # seconds of vibration kept for the plot
 
 
-class GraphWatcher:
-    """Collects ``fault_state``, ``sim/truth`` and ``vibration/drive_end`` in a background thread."""
+class MotorLog:
+    """What one motor's graph published: decisions, ground truth, the recent vibration (thread-safe)."""
 
-    def __init__(self, namespace: str = ""):
-        self.on_change: Callable[[str], None] | None = None
+    def __init__(self, motor: str):
+        self.motor = motor
         self._lock = threading.Lock()
         self._decisions: list = []
         self._truth: list = []
         self._signal = collections.deque()
         self._fs = None
         self._end = None
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)  # bearing-graph's own
-        ns = f"/{namespace.strip('/')}" if namespace else ""
-        self.node = rclpy.create_node("graph_watcher", namespace=ns or None, context=self.context)
-        self.node.create_subscription(FaultStateMsg, topics.FAULT_STATE.name, self._on_state,
-                                      topics.qos(topics.FAULT_STATE, depth=QUEUE))
-        self.node.create_subscription(FaultStateMsg, topics.TRUTH.name, self._on_truth,
-                                      topics.qos(topics.TRUTH, depth=QUEUE))
-        self.node.create_subscription(VibrationChunk, topics.VIBRATION.name, self._on_chunk,
-                                      topics.qos(topics.VIBRATION, depth=QUEUE))
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self._running = True
-        self._thread = threading.Thread(target=self._spin, daemon=True)
-        self._thread.start()
 
-    def _spin(self):
-        while self._running and self.context.ok():
-            try:
-                self.executor.spin_once(timeout_sec=0.05)
-            except Exception:  # Jazzy: RCLError when a signal shuts the context down mid-spin
-                if self.context.ok():
-                    raise
-
-    def _on_state(self, msg):
-        change = StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp), float(msg.confidence))
+    def add_state(self, change: StateChange) -> str | None:
+        """A published decision; returns the text of a state change, None when the state stayed."""
         with self._lock:
             previous = self._decisions[-1] if self._decisions else None
             self._decisions.append(change)
-        if previous is None or previous.state != change.state:
-            before = FaultState(previous.state).name if previous else "(start)"
-            text = (f"t={change.detected_at:.3f} s  {before} -> {FaultState(change.state).name}  "
-                    f"(confidence {change.confidence:.2f}, onset {change.onset:.3f} s)")
-            if self.on_change:
-                self.on_change(text)
+        if previous is not None and previous.state == change.state:
+            return None
+        before = FaultState(previous.state).name if previous else "(start)"
+        return (f"t={change.detected_at:.3f} s  {before} -> {FaultState(change.state).name}  "
+                f"(confidence {change.confidence:.2f}, onset {change.onset:.3f} s)")
 
-    def _on_truth(self, msg):
-        change = StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp))
+    def add_truth(self, change: StateChange) -> None:
         with self._lock:
             if self._truth and change.onset <= self._truth[-1].onset:  # a restarted simulator: a new run
                 self._truth.clear()
@@ -80,12 +62,11 @@ class GraphWatcher:
                 self._signal.clear()
             self._truth.append(change)
 
-    def _on_chunk(self, msg):
-        t0 = to_seconds(msg.header.stamp)
-        samples = np.asarray(msg.samples)
+    def add_chunk(self, t0: float, samples: np.ndarray, sample_rate: float) -> None:
+        """A vibration chunk whose first sample is at ``t0`` (s)."""
         with self._lock:
-            self._fs = msg.sample_rate
-            self._end = t0 + len(samples) / msg.sample_rate
+            self._fs = sample_rate
+            self._end = t0 + len(samples) / sample_rate
             self._signal.append((t0, samples))
             while self._signal and self._end - self._signal[0][0] > KEEP_SIGNAL_S:
                 self._signal.popleft()
@@ -102,17 +83,11 @@ class GraphWatcher:
             return decisions
         return [d for i, d in enumerate(decisions) if i == 0 or decisions[i - 1].state != d.state]
 
-    def wait_decided_to_end(self, timeout: float, stop, slack: float = 0.06) -> bool:
-        """Wait until a fault_state covers the end of the received signal (within ``slack`` s), or ``stop``."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not stop:
-            with self._lock:
-                done = self._end is not None and self._decisions and \
-                    self._decisions[-1].detected_at >= self._end - slack
-            if done:
-                return True
-            time.sleep(0.05)
-        return False
+    def decided_to_end(self, slack: float = 0.06) -> bool:
+        """A fault_state covers the end of the received signal (within ``slack`` s)."""
+        with self._lock:
+            return self._end is not None and bool(self._decisions) and \
+                self._decisions[-1].detected_at >= self._end - slack
 
     def signal_end(self) -> float | None:
         with self._lock:
@@ -144,6 +119,68 @@ class GraphWatcher:
         fig.tight_layout()
         fig.savefig(path, dpi=110)
         plt.close(fig)
+
+
+class GraphWatcher:
+    """Collects ``fault_state``, ``sim/truth`` and ``vibration/drive_end`` of each namespace in
+    ``namespaces`` in a background thread; ``motors[namespace]`` holds them."""
+
+    def __init__(self, namespaces=("",)):
+        self.on_change: Callable[[str, str], None] | None = None  # (motor, text) of each state change
+        self.motors = {ns.strip("/"): MotorLog(ns.strip("/")) for ns in namespaces}
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)  # bearing-graph's own
+        self.node = rclpy.create_node("graph_watcher", context=self.context)
+        for ns, log in self.motors.items():
+            self.node.create_subscription(FaultStateMsg, topics.qualified(ns, topics.FAULT_STATE),
+                                          lambda msg, log=log: self._on_state(log, msg),
+                                          topics.qos(topics.FAULT_STATE, depth=QUEUE))
+            self.node.create_subscription(FaultStateMsg, topics.qualified(ns, topics.TRUTH),
+                                          lambda msg, log=log: self._on_truth(log, msg),
+                                          topics.qos(topics.TRUTH, depth=QUEUE))
+        self._vibration: set = set()  # motors whose vibration is subscribed
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._running = True
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self):
+        while self._running and self.context.ok():
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # Jazzy: RCLError when a signal shuts the context down mid-spin
+                if self.context.ok():
+                    raise
+
+    def _on_state(self, log: MotorLog, msg):
+        text = log.add_state(StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp),
+                                         float(msg.confidence)))
+        if text is not None and self.on_change:
+            self.on_change(log.motor, text)
+
+    def _on_truth(self, log: MotorLog, msg):
+        log.add_truth(StateChange(int(msg.state), to_seconds(msg.onset), to_seconds(msg.header.stamp)))
+        if log.motor not in self._vibration:
+            self._vibration.add(log.motor)
+            self.node.create_subscription(VibrationChunk, topics.qualified(log.motor, topics.VIBRATION),
+                                          lambda chunk: self._on_chunk(log, chunk),
+                                          topics.qos(topics.VIBRATION, depth=QUEUE))
+
+    @staticmethod
+    def _on_chunk(log: MotorLog, msg):
+        log.add_chunk(to_seconds(msg.header.stamp), np.asarray(msg.samples), msg.sample_rate)
+
+    def wait_decided_to_end(self, timeout: float, stop, motors=None) -> list:
+        """Wait until a fault_state covers the end of the received signal of each of ``motors``
+        (default: all), or ``stop``; return the motors that did not get there."""
+        logs = [self.motors[m] for m in (self.motors if motors is None else motors)]
+        deadline = time.monotonic() + timeout
+        while True:
+            pending = [log.motor for log in logs if not log.decided_to_end()]
+            if not pending or time.monotonic() >= deadline or stop:
+                return pending
+            time.sleep(0.05)
 
     def close(self) -> None:
         self._running = False

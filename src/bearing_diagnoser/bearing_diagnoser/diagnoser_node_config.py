@@ -25,6 +25,9 @@ PARAMETERS = (
     ParameterSpec("stale_timeout", 1.0, "seconds without residuals before /diagnostics reports STALE", positive,
                   dynamic=True),
     ParameterSpec("diagnostics_period", 1.0, "seconds between /diagnostics messages", positive),
+    ParameterSpec("motor", "", "the motor in /diagnostics (status bearing_monitor/<motor>/drive_end, hardware_id "
+                  "<motor>); empty = the node's namespace without the leading slash, or the host's name in the "
+                  "root namespace"),
 )
 
 #: Parameters whose change restarts the decision (new windows, thresholds or hypotheses).

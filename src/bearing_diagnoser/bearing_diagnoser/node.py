@@ -2,11 +2,13 @@
 
 Subscribes ``residual/outer_race``, ``residual/inner_race`` and ``shaft_speed``; publishes
 ``fault_state`` (FaultState, reliable + transient local: a late subscriber sees the current
-state) on every decision, and ``/diagnostics`` (OK NORMAL, ERROR a fault, WARN UNKNOWN, a
-silent observer or an unusable sensor signal, STALE no input; a last STALE "stopped" when
-the node ends). Signal timing comes from the residuals' stamps and sample indices only, so
-replays at any rate (with ``use_sim_time``) give the same decisions. The logic lives in
-:class:`.session.DiagnoserSession`; this module only wires ROS to it.
+state) on every decision, and ``/diagnostics`` (status ``bearing_monitor/<motor>/drive_end``,
+hardware id the motor: the ``motor`` parameter, the namespace or the host's name; OK NORMAL,
+ERROR a fault, WARN UNKNOWN, a silent observer or an unusable sensor signal, STALE no input;
+a last STALE "stopped" when the node ends). Signal timing comes from the residuals' stamps
+and sample indices only, so replays at any rate (with ``use_sim_time``) give the same
+decisions. The logic lives in :class:`.session.DiagnoserSession`; this module only wires
+ROS to it.
 """
 
 import sys
@@ -23,16 +25,17 @@ from bearing_msgs.msg import FaultState as FaultStateMsg
 from bearing_msgs.msg import Residual, ShaftSpeed
 
 from .diagnoser_node_config import PARAMETERS
-from .session import DiagnoserSession, Health, StateReport
+from .session import DiagnoserSession, Health, StateReport, motor_name, status_name
 
 
 class DiagnoserNode(Node):
     """Thin adapter: Residual chunks -> DiagnoserSession -> FaultState and /diagnostics."""
 
-    def __init__(self):
-        super().__init__("diagnoser")
+    def __init__(self, name: str = "diagnoser", namespace: str | None = None):
+        super().__init__(name, namespace=namespace)
         self.values = declare(self, PARAMETERS, on_change=lambda changed: self.session.configure(changed))
         self.session = DiagnoserSession(self.values, self._log)
+        self.motor = motor_name(self.values["motor"], self.get_namespace())
         self.session.warm_up()  # before subscribing: being subscribed means being ready
         self.pub_state = self.create_publisher(FaultStateMsg, topics.FAULT_STATE.name, topics.qos(topics.FAULT_STATE))
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
@@ -72,8 +75,8 @@ class DiagnoserNode(Node):
                                    f"(confidence {report.confidence:.2f}, onset {report.onset:.3f} s)")
 
     def _publish_health(self, health: Health) -> None:
-        status = DiagnosticStatus(level=bytes([health.level]), name=f"{self.get_fully_qualified_name()}: "
-                                  "drive_end bearing", message=health.message, hardware_id="drive_end")
+        status = DiagnosticStatus(level=bytes([health.level]), name=status_name(self.motor), message=health.message,
+                                  hardware_id=self.motor)
         status.values = [KeyValue(key=k, value=str(v)) for k, v in health.values.items()]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()
@@ -82,7 +85,7 @@ class DiagnoserNode(Node):
     def publish_diagnostics(self) -> None:
         self._publish_health(self.session.health(self._now()))
 
-    def shutdown(self) -> None:
+    def on_shutdown(self) -> None:
         """Called by the node main while the context is still valid: a last status."""
         self._publish_health(self.session.final_health(self._now()))
 

@@ -14,12 +14,15 @@ What the node does between ROS and the decision core:
   the stale timeout, WARN when one observer is silent, when the sensor signal is unusable
   (:mod:`.sensor_health`), when a real machine's shaft speed is unknown (estimated blind
   from the vibration, which misses most faults: ``bearing-accuracy`` ablation) or the state
-  is UNKNOWN, ERROR for a fault, OK for NORMAL.
+  is UNKNOWN, ERROR for a fault, OK for NORMAL —, named ``bearing_monitor/<motor>/drive_end``
+  with the motor as hardware id, so that ``diagnostic_aggregator`` groups a fleet's statuses
+  (``config/diagnostic_aggregator.yaml``).
 """
 
 from __future__ import annotations
 
 import math
+import socket
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -42,6 +45,21 @@ MAX_RPM = 1e6
 
 SPEED_UNKNOWN = ("shaft speed unknown: estimated from the vibration, which misses most faults; "
                  "set the rpm parameter or publish shaft_speed")
+
+#: /diagnostics status names: ``STATUS_PREFIX/<motor>/SENSOR_LOCATION``.
+STATUS_PREFIX = "bearing_monitor"
+SENSOR_LOCATION = "drive_end"
+
+
+def motor_name(parameter: str, namespace: str) -> str:
+    """The motor a diagnoser watches (its /diagnostics hardware id): the ``motor`` parameter,
+    else the node's namespace without the leading slash, else (root namespace) the host's name."""
+    return parameter or namespace.strip("/") or socket.gethostname()
+
+
+def status_name(motor: str) -> str:
+    """The /diagnostics status name of ``motor``'s bearing, e.g. ``bearing_monitor/motor_3/drive_end``."""
+    return f"{STATUS_PREFIX}/{motor}/{SENSOR_LOCATION}"
 
 
 @dataclass(frozen=True)

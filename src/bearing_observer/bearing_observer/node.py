@@ -29,8 +29,8 @@ from .observer_session import ObserverSession
 class ObserverNode(Node):
     """Thin adapter: VibrationChunk -> ObserverSession.on_chunk -> Residual."""
 
-    def __init__(self, name: str):
-        super().__init__(name)
+    def __init__(self, name: str, namespace: str | None = None):
+        super().__init__(name, namespace=namespace)
         values = declare(self, PARAMETERS, lambda changed: self.session.configure(changed))
         fault = parse_fault(values["fault_type"])
         self.session = ObserverSession(fault, values["bearing"], values["model_set"], values["rpm"],

@@ -171,33 +171,52 @@ def write_signal_bag(out, samples, sample_rate: float, rpm: float, source: str, 
     ``sample_rate``; ``shaft_speed``: one ShaftSpeed (rad/s) per chunk, same stamp.
     Log time = stamp.
     """
+    return write_signals_bag(out, {namespace: samples}, sample_rate, rpm, source, speed_source, chunk_duration,
+                             start_time, storage, frame_id, bearing, bag_namespace=namespace)
+
+
+def write_signals_bag(out, signals: dict, sample_rate: float, rpm: float, source: str, speed_source: str = "",
+                      chunk_duration: float = DEFAULT_CHUNK_DURATION, start_time: float = 0.0,
+                      storage: str = "mcap", frame_id: str = "drive_end", bearing: str = "",
+                      bag_namespace: str = "") -> int:
+    """:func:`write_signal_bag` for several motors in one bag: ``signals`` maps a namespace to its
+    acceleration (m/s², all at ``sample_rate`` Hz and ``rpm``); chunks of equal stamps follow each
+    other in namespace order. ``bag_namespace`` is stored as the recorded namespace. Returns the
+    chunk count of the longest signal.
+    """
     if not (np.isfinite(chunk_duration) and chunk_duration > 0):
         raise BagError(f"chunk duration must be positive, got {chunk_duration:g} s")
     if not (np.isfinite(start_time) and start_time >= 0):
         raise BagError(f"start time must be >= 0 s, got {start_time:g}")
     if not (np.isfinite(rpm) and rpm > 0):
         raise BagError(f"shaft speed must be positive, got {rpm:g} rpm")
-    x = np.asarray(samples, dtype=np.float64)
+    xs = {ns: np.asarray(x, dtype=np.float64) for ns, x in signals.items()}
     fs = float(sample_rate)
     n_chunk = max(1, int(round(chunk_duration * fs)))
     omega = float(rpm) * 2.0 * np.pi / 60.0
-    vib, spd = topics.qualified(namespace, topics.VIBRATION), topics.qualified(namespace, topics.SHAFT_SPEED)
     vib_type, spd_type = topics.VIBRATION.msgtype, topics.SHAFT_SPEED.msgtype
     count = 0
-    with BagWriter(out, storage, namespace, bearing) as bag:
+    with BagWriter(out, storage, bag_namespace, bearing) as bag:
         ts = bag.typestore
         Header, Chunk, Speed = (ts.types["std_msgs/msg/Header"], ts.types[vib_type], ts.types[spd_type])
-        bag.add_graph_topic(topics.VIBRATION, namespace)
-        bag.add_graph_topic(topics.SHAFT_SPEED, namespace)
-        for i0 in range(0, x.size, n_chunk):
+        names = {}
+        for ns in xs:
+            bag.add_graph_topic(topics.VIBRATION, ns)
+            bag.add_graph_topic(topics.SHAFT_SPEED, ns)
+            names[ns] = topics.qualified(ns, topics.VIBRATION), topics.qualified(ns, topics.SHAFT_SPEED)
+        for i0 in range(0, max(x.size for x in xs.values()), n_chunk):
             stamp = time_msg(ts, start_time + i0 / fs)
             log_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
-            chunk = Chunk(header=Header(stamp=stamp, frame_id=frame_id), sample_rate=fs,
-                          first_sample_index=i0, source=source,
-                          samples=np.ascontiguousarray(x[i0:i0 + n_chunk]))
-            bag.write(vib, log_ns, bag.serialize(chunk, vib_type))
-            speed = Speed(header=Header(stamp=stamp, frame_id=""), angular_velocity=omega,
-                          source=speed_source or source)
-            bag.write(spd, log_ns, bag.serialize(speed, spd_type))
+            for ns, x in xs.items():
+                if i0 >= x.size:
+                    continue
+                vib, spd = names[ns]
+                chunk = Chunk(header=Header(stamp=stamp, frame_id=frame_id), sample_rate=fs,
+                              first_sample_index=i0, source=source,
+                              samples=np.ascontiguousarray(x[i0:i0 + n_chunk]))
+                bag.write(vib, log_ns, bag.serialize(chunk, vib_type))
+                speed = Speed(header=Header(stamp=stamp, frame_id=""), angular_velocity=omega,
+                              source=speed_source or source)
+                bag.write(spd, log_ns, bag.serialize(speed, spd_type))
             count += 1
     return count
