@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup demo test unit lint bench accuracy soak clean
+.PHONY: setup demo test unit lint fuzz bench accuracy soak clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -21,6 +21,12 @@ unit: setup
 
 lint: setup
 	@.venv/bin/ruff check .
+
+# the property-based tests with new random cases, FUZZ_CASES per property (the suite: 300, fixed)
+FUZZ_CASES ?= 3000
+fuzz: setup
+	@BEARING_FUZZ_CASES=$(FUZZ_CASES) $(VENV_PY) -m pytest tests/unit/test_fuzz_inputs.py --hypothesis-profile=explore \
+		-o timeout=1800 -o faulthandler_timeout=300
 
 bench: setup
 	@$(VENV_PY) benchmarks/run.py --out out/bench.md

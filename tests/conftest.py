@@ -1,9 +1,20 @@
-"""Shared test fixtures: the recordings in ../shared/data, skipped with the reason when absent."""
+"""Shared test fixtures: the recordings in ../shared/data, skipped with the reason when absent;
+the hypothesis profiles of the property-based tests.
+
+The suite runs the ``suite`` profile: derandomized, so that every machine runs the same cases
+(those that passed here; a failure reproduces anywhere). ``make fuzz`` runs ``explore``: new
+random cases on every run, many more of them, for finding what the suite's cases miss.
+"""
 
 import pathlib
 
 import pytest
 from data_paths import data_dir
+from hypothesis import settings
+
+settings.register_profile("suite", derandomize=True, database=None)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile("suite")
 
 
 def _finder(subdir: str):

@@ -78,3 +78,22 @@ def test_restarted_producer_is_followed_when_its_first_chunks_were_missed():
     v = stream.check(*chunk(2))  # chunks 0 and 1 of the new run never arrived
     assert v.accepted and v.resync and v.restart and v.reason == "stream restarted"
     assert stream.check(*chunk(3)).accepted
+
+
+def test_restarted_sensor_with_a_running_clock_is_followed():
+    stream = ChunkStream("vib")
+    for i in range(100, 103):
+        stream.check(*chunk(i))
+    t, i, fs, x = chunk(2)
+    v = stream.check(t + 10.0, i, fs, x)  # a driver restarted 10 s later; its first two chunks lost
+    assert v.accepted and v.restart and v.reason == "stream restarted"
+
+
+def test_a_refused_chunk_claiming_a_restart_changes_nothing():
+    stream = ChunkStream("vib")
+    for i in range(3):
+        stream.check(*chunk(i))
+    t, i, fs, x = chunk(0)
+    assert not stream.check(t + 5.0, i, 0.0, x).accepted  # index 0, but a malformed rate
+    v = stream.check(*chunk(3))
+    assert v.accepted and not v.resync and not v.restart

@@ -234,3 +234,25 @@ def test_a_gap_in_a_stream_skips_the_windows_it_touches_and_decisions_resume():
     assert not any(d.window_start < gap[1] - 1e-9 and d.window_end > gap[0] + 1e-9 for d in out)
     assert any(d.window_start >= gap[1] - 1e-9 for d in out)
     assert out[-1].time > 0.55 and all(d.state == O for d in out)
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("gap", [True, False], ids=["gap", "late-start"])
+def test_streams_beginning_or_resuming_far_ahead_are_decided_at_once(gap):
+    """Chunk indices far ahead (a producer's index jumping 2⁴⁰ samples, or streams that begin
+    there): decided from there on, neither walking nor padding the hole window by window
+    (found by the fuzz test: the core walked 10¹⁰ empty windows)."""
+    rng = np.random.default_rng(12)
+    y = burst_train(0.4, FS, BPFO, amplitude=10.0, rng=rng) + noise(0.4)
+    dg = Diagnoser(config_for("sim_48k"))
+    first = y[:4800]
+    if gap:  # 0.1 s at index 0 first: the jump is a gap
+        for h, f in ((O, BPFO), (I, BPFI)):
+            dg.update(h, 0, FS, first, None, None, f)
+    out = []
+    start = 2**40
+    for i in range(0, y.size, 480):
+        for h, f in ((O, BPFO), (I, BPFI)):
+            out += dg.update(h, start + i, FS, y[i:i + 480], None, None, f)
+    assert out and all(d.window_start >= start / FS - 1e-6 for d in out)
+    assert out[-1].state == O

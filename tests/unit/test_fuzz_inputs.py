@@ -23,6 +23,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
 
 import numpy as np
 import pytest
@@ -41,7 +42,8 @@ from bearing_recordings.recording import InputError
 
 FS = 12000.0
 O, I = FaultState.OUTER_RACE, FaultState.INNER_RACE
-CASES = 300
+#: Cases per property (``BEARING_FUZZ_CASES`` raises it for a long search: ``make fuzz``).
+CASES = int(os.environ.get("BEARING_FUZZ_CASES", "300"))
 
 floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
 rates = st.one_of(st.sampled_from([0.0, -12000.0, math.nan, math.inf, 1e-9, 1e12, 12000.0, 48000.0]), floats)

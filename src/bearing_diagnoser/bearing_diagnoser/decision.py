@@ -268,6 +268,10 @@ class Diagnoser:
             ready = {h: s for h, s in self._streams.items() if s.n_blocks >= b1}
             if not ready:
                 break
+            held = min(s.first_block for s in ready.values())
+            if b0 < held:  # no stream holds this window (they began or resumed later): go to the first that may
+                self._next_window = -(-held // hop)
+                continue
             missing = [h for h in STREAMS if h not in ready]
             if missing and not final:
                 lead = max(s.n_blocks for s in self._streams.values())

@@ -4,8 +4,9 @@ A stream (one observer's residual topic) arrives in chunks with the index of the
 sample. :class:`StreamBlocks` turns them into fixed-length blocks (an
 :class:`.periodicity.EnergyEnvelope`, with or without its band-pass) aligned to multiples
 of the block length, so that windows of every stream line up. A gap pads NaN blocks (the
-windows touching it are skipped) and restarts the envelope filter; an overlap or repeat
-drops what was seen.
+windows touching it are skipped) and restarts the envelope filter; a gap longer than
+:data:`MAX_PAD_BLOCKS` blocks begins the stream afresh after it instead (a producer's index
+jumping far ahead must not allocate the hole); an overlap or repeat drops what was seen.
 """
 
 from __future__ import annotations
@@ -13,6 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from .periodicity import EnergyEnvelope
+
+#: Longest gap padded with NaN blocks (2¹⁶ blocks: tens of seconds at the envelope rates used).
+MAX_PAD_BLOCKS = 1 << 16
 
 
 class StreamBlocks:
@@ -34,14 +38,18 @@ class StreamBlocks:
 
     def __init__(self, envelope: EnergyEnvelope):
         self.env = envelope
-        self.next_sample: int | None = None  # index of the next expected sample
-        self.first_block: int | None = None  # absolute index of column _start
-        self._store = np.zeros((len(envelope.keys), 0))
-        self._start = 0
-        self._fill = 0
+        self._begin()
         self.fault_hz: float | None = None
         self.has_model = False
         self.has_train = False
+
+    def _begin(self) -> None:
+        """Hold nothing: the next chunk starts the blocks (and their alignment) afresh."""
+        self.next_sample: int | None = None  # index of the next expected sample
+        self.first_block: int | None = None  # absolute index of column _start
+        self._store = np.zeros((len(self.env.keys), 0))
+        self._start = 0
+        self._fill = 0
 
     @property
     def n_blocks(self) -> int:
@@ -67,6 +75,9 @@ class StreamBlocks:
     def push(self, first_index: int, y, r, u) -> None:
         """Append samples y, r, u (equal length) starting at stream index ``first_index``."""
         d = self.env.decimation
+        if self.next_sample is not None and first_index - self.next_sample > MAX_PAD_BLOCKS * d:
+            self.env = self.env.fresh()  # a long gap: begin afresh there instead of padding it
+            self._begin()
         if self.next_sample is None:
             skip = (-first_index) % d  # align blocks to multiples of D
             self.first_block = (first_index + skip) // d

@@ -57,25 +57,28 @@ class ChunkStream:
         self._next_index: int | None = None
         self._next_time: float | None = None
         self._last_stamp: float | None = None
+        self._last_index: int | None = None
         self._rate: float | None = None
 
     def check(self, stamp: float, first_index: int, sample_rate: float, samples: np.ndarray) -> Verdict:
         """Check a chunk whose first sample is at ``stamp`` (s) with stream index ``first_index``."""
         n = len(samples)
-        # producer restarted (or a replay began): back to index 0, or index and stamp both went back
-        # (a restarted producer whose first chunks this consumer missed)
+        # producer restarted (or a replay began): back to index 0, or back before the index expected
+        # (a restarted producer whose first chunks this consumer missed; its stamps go back, to a
+        # simulator's 0, or on, with a sensor's clock); the last chunk again (but the first of a run)
+        # is a repeat, refused below by its stamp
+        repeat = stamp == self._last_stamp and first_index == self._last_index
         restarted = self._last_stamp is not None and (first_index == 0 or (
-            stamp < self._last_stamp and self._next_index is not None and first_index < self._next_index))
-        if restarted:
-            self._next_index = None
-            self._last_stamp = None
-        problem = self._problem(stamp, sample_rate, samples, n)
-        if problem:
+            self._next_index is not None and first_index < self._next_index and not repeat))
+        problem = self._problem(stamp, sample_rate, samples, n, check_order=not restarted)
+        if problem:  # a refused chunk changes nothing but the counts (a hole: the next one resyncs)
             self.counts["rejected"] += 1
             self.counts[problem.split(":")[0]] += 1
             if problem.startswith("non-finite"):
                 self._next_index = None  # the hole must not be bridged: resync on the next chunk
             return Verdict(False, reason=f"{self.name}: {problem}")
+        if restarted:
+            self._next_index = None
         rate_changed = self._rate is not None and self._rate != sample_rate
         resync = self._next_index is None or rate_changed
         reason = ""
@@ -91,13 +94,13 @@ class ChunkStream:
         elif rate_changed:
             reason = f"{self.name}: sample rate changed {self._rate:g} -> {sample_rate:g} Hz; restarting"
         self._rate = sample_rate
-        self._last_stamp = stamp
+        self._last_stamp, self._last_index = stamp, first_index
         self._next_index = first_index + n
         self._next_time = stamp + n / sample_rate
         self.counts["accepted"] += 1
         return Verdict(True, resync=resync, reason=reason, restart=restarted or rate_changed)
 
-    def _problem(self, stamp, sample_rate, samples, n) -> str:
+    def _problem(self, stamp, sample_rate, samples, n, check_order: bool) -> str:
         rate_problem = sample_rate_problem(sample_rate)
         if rate_problem:
             return rate_problem
@@ -110,7 +113,7 @@ class ChunkStream:
         if not np.all(np.isfinite(samples)):
             bad = int(np.count_nonzero(~np.isfinite(samples)))
             return f"non-finite samples: {bad} NaN/inf of {n}"
-        if self._last_stamp is not None and stamp <= self._last_stamp:
+        if check_order and self._last_stamp is not None and stamp <= self._last_stamp:
             return f"out-of-order stamp: {stamp:.6f} s after {self._last_stamp:.6f} s"
         return ""
 
