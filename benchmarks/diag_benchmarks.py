@@ -24,8 +24,9 @@ import numpy as np
 from bearing_common.bearings import CATALOG, fault_frequency
 from bearing_common.states import FaultState
 from bearing_diagnoser.decision import STREAMS, Diagnoser
-from bearing_diagnoser.decision_config import NO_MODEL, config_for
+from bearing_diagnoser.decision_config import config_for
 from bearing_diagnoser.offline import diagnose_measurement, diagnose_recording
+from bearing_observer.model_sets import NONE
 from bearing_recordings.recording import Recording
 
 from .evaluation import THESIS_CASES, score_case, simulate_case
@@ -131,7 +132,7 @@ def steady_state_throughput(model_set: str = "sim_48k", fs: float = 48000.0, sec
         dg = Diagnoser(config_for(model_set), model_set, BEARING, fs)
         dg.tell_speed(1800.0)
         obs = {h: FaultObserver.from_model_set(model_set, h.label, 1800.0, fs) for h in HYPOTHESES} \
-            if model_set != NO_MODEL else {}
+            if model_set != NONE else {}
         cpu_obs = 0.0
         start = time.process_time()
         for i in range(0, x.size - chunk + 1, chunk):
@@ -220,7 +221,7 @@ def bench_steady_state_throughput():
     rows = []
     for fs, sim_set in ((48000.0, "sim_48k"), (12000.0, "sim_12k")):
         rec = simulate_case("or", 1800.0, 4.5e-3, segment_s=2.0, sample_rate=fs)
-        rows += steady_state_throughput(sim_set, fs, record=rec) + steady_state_throughput(NO_MODEL, fs, record=rec)
+        rows += steady_state_throughput(sim_set, fs, record=rec) + steady_state_throughput(NONE, fs, record=rec)
     return rows
 
 

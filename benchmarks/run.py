@@ -61,7 +61,13 @@ def main(argv=None) -> int:
     lines = ["| figure | value | unit | machine |", "|---|---|---|---|"]
     failed = 0
     for name in MODULES:
-        module = importlib.import_module(name)
+        try:
+            module = importlib.import_module(name)
+        except Exception:  # reported like a failing benchmark; the other modules still run
+            failed += 1
+            traceback.print_exc()
+            lines.append(f"| {name} | FAILED (import) | - | {host} |")
+            continue
         for fname, func in inspect.getmembers(module, inspect.isfunction):
             if not fname.startswith("bench_") or func.__module__ != name:
                 continue

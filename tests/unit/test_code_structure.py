@@ -207,3 +207,12 @@ def test_runs_without_bearing_sim(tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert '"state": "normal"' in proc.stdout, proc.stdout
+
+
+def test_every_benchmark_module_imports():
+    """``make bench`` imports them all: one broken import (a renamed name) lost the whole table."""
+    import importlib
+
+    from benchmarks.run import MODULES
+    for name in MODULES:
+        importlib.import_module(name)
