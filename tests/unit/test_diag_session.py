@@ -44,3 +44,55 @@ def test_no_speed_warning_with_a_nominal_speed_or_a_simulator_model_set(values):
     feed(s)
     assert s.health(0.1).level == LEVEL_OK
     assert not any(SPEED_UNKNOWN in text for _, text in logged)
+
+
+def test_a_restarted_producer_whose_outer_race_residuals_come_late_raises_no_false_state():
+    """The simulator restarted (indices and stamps back to 0); the OR observer's first residuals of
+    the new run were lost (its DDS match came late), so only IR arrives for 2 s (the decision's
+lag allowance is 1 s). The restarted
+    folding decision must wait for the OR stream it knows is deployed, not decide without it
+    (found by test_graph_restart: NORMAL, UNKNOWN, INNER_RACE on an outer-race signal)."""
+    from bearing_common.bearings import CATALOG, fault_frequency
+    from bearing_diagnoser.synthetic import burst_train, white_noise
+    fs, o, i = 48000.0, FaultState.OUTER_RACE, FaultState.INNER_RACE
+    s, _ = session(rpm=1800.0)
+    y = burst_train(3.0, fs, fault_frequency(CATALOG["6205"], o, 1800.0), amplitude=10.0,
+                    rng=np.random.default_rng(2)) + white_noise(3.0, fs, 4.5e-3)
+    f = {h: fault_frequency(CATALOG["6205"], h, 1800.0) for h in (o, i)}
+
+    def run(start, late, stamp0):
+        out = []
+        for k in range(start, y.size, 480):
+            for h in (o, i):
+                if h == o and k < late:
+                    continue
+                c = y[k:k + 480]
+                out += s.on_residual(h, stamp0 + k / fs, k, fs, c, np.zeros_like(c), np.zeros_like(c), f[h],
+                                     "sim_48k", now=0.0)
+        return out
+
+    run(0, 0, 100.0)  # a first run of 3 s with both streams
+    assert s.last_report.state == o
+    after = run(0, 96000, 0.0)  # the new run: OR residuals only from 2 s on
+    assert after and {r.state for r in after} == {o}, sorted({(r.state.name, r.detail) for r in after})
+    assert all("decided without" not in r.detail for r in after)
+
+
+def test_an_observer_known_to_be_deployed_is_waited_for_at_start():
+    """The node saw both observers' publishers matched, but the OR residuals' first 2 s were lost:
+    the decision holds instead of deciding without OR."""
+    from bearing_common.bearings import CATALOG, fault_frequency
+    from bearing_diagnoser.synthetic import burst_train, white_noise
+    fs, o, i = 48000.0, FaultState.OUTER_RACE, FaultState.INNER_RACE
+    y = burst_train(3.0, fs, fault_frequency(CATALOG["6205"], o, 1800.0), amplitude=10.0,
+                    rng=np.random.default_rng(3)) + white_noise(3.0, fs, 4.5e-3)
+    for expected, ok in (({o, i}, True), (set(), False)):
+        s, _ = session(rpm=1800.0)
+        s.expect(expected)
+        out = []
+        for k in range(0, y.size, 480):
+            for h in (o, i) if k >= 96000 else (i,):
+                c = y[k:k + 480]
+                out += s.on_residual(h, k / fs, k, fs, c, np.zeros_like(c), np.zeros_like(c),
+                                     fault_frequency(CATALOG["6205"], h, 1800.0), "sim_48k", now=0.0)
+        assert out and ({r.state for r in out} == {o}) == ok, sorted({(r.state.name, r.detail) for r in out})

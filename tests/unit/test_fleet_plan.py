@@ -135,3 +135,18 @@ def test_multi_node_processes_take_only_fully_qualified_names_of_shareable_nodes
             nodes_main.split_name(bad)
     with pytest.raises(ValueError, match="no nodes named"):
         nodes_main.make_nodes([])
+
+
+@pytest.mark.parametrize("layout", ["role", "motor", "node"])
+def test_bearing_graph_knows_which_motors_have_a_diagnoser_in_every_layout(tmp_path, layout):
+    """bearing-graph starts a motor's simulator once its diagnoser's fault_state reaches it."""
+    from bearing_bringup.graph_cli import diagnosed_motors
+    path = tmp_path / "f.yaml"
+    path.write_text(yaml.safe_dump({"layout": layout, "motors_per_process": 2,
+                                    "motors": {"m1": {}, "m2": {}, "m3": {"sensor": "external"}}}))
+    procs = processes(load_fleet(path))
+    assert diagnosed_motors(procs) == {"m1", "m2", "m3"}
+    without = [p for p in procs
+               if "/m2/diagnoser" not in p.arguments and (p.namespace, p.node_name) != ("m2", "diagnoser")]
+    assert diagnosed_motors(without) == ({"m1", "m2", "m3"} - ({"m1", "m2"} if layout == "role" else {"m2"}))
+    assert diagnosed_motors(single_graph()) == {""} and diagnosed_motors(single_graph("motor_7")) == {"motor_7"}

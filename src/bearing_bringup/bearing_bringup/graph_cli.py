@@ -47,6 +47,7 @@ EXIT_MISSING = 3
 EXIT_FAILED = 1
 EXIT_BAD_FLEET = 2
 MISSING_SIMULATOR_RUN_S = 5.0
+DIAGNOSER_WAIT_S = 30.0  # longest wait for the diagnosers' fault_state before the simulators start anyway
 FLEET_PARAMS = "fleet_params.yaml"
 
 
@@ -64,6 +65,14 @@ def missing_parts(procs=None) -> list:
         elif proc.node_name and importlib.util.find_spec(f"{proc.package}.node") is None:
             missing.append(f"{proc.name} ({proc.package}.node: module missing)")
     return missing
+
+
+def diagnosed_motors(procs) -> set:
+    """Namespaces whose diagnoser one of ``procs`` runs (alone, or among a ``nodes`` process' nodes)."""
+    out = {p.namespace for p in procs if p.node_name == "diagnoser"}
+    for p in procs:
+        out.update(name.strip("/").rpartition("/")[0] for name in p.arguments if name.endswith("/diagnoser"))
+    return out
 
 
 def process_argv(proc, params_file: pathlib.Path) -> list:
@@ -126,11 +135,23 @@ def main(argv=None) -> int:
         for part in missing:
             group.echo(f"MISSING: {part}")
         try:
-            for proc in runnable:
+            # the monitoring nodes first, the simulators once the diagnosers' states reach us
+            monitors = [p for p in runnable if not p.sensor]
+            for proc in monitors:
                 group.start(proc.name, process_argv(proc, params_file))
+            awaited = [p.namespace for p in runnable if p.sensor and p.namespace in diagnosed_motors(monitors)]
+            if awaited:
+                unheard = watcher.wait_for_diagnosers(DIAGNOSER_WAIT_S, stop, awaited)
+                if unheard:
+                    group.echo(f"no diagnoser publishing after {DIAGNOSER_WAIT_S:g} s"
+                               + (f" ({', '.join(unheard)})" if fleet else "") + "; starting the simulator anyway")
+            for proc in runnable:
+                if proc.sensor:
+                    group.start(proc.name, process_argv(proc, params_file))
             for member in group.members:
                 group.echo(f"started {member.name} (pid {member.process.pid})")
-            sensors = [m for m, p in zip(group.members, runnable) if p.sensor]
+            sensor_names = {p.name for p in runnable if p.sensor}
+            sensors = [m for m in group.members if m.name in sensor_names]
             # Without a simulator nothing ends the scenario: show that the rest starts, then stop
             # (a fleet of external sensors runs until Ctrl-C or the timeout).
             expected = any(p.sensor for p in procs)
@@ -149,7 +170,8 @@ def main(argv=None) -> int:
             codes = group.stop()
             watcher.close()
 
-    group.echo("exit codes: " + ", ".join(f"{name} {code}" for name, code in codes.items()))
+    order = [p.name for p in runnable if p.name in codes]  # the graph's order, not the start order
+    group.echo("exit codes: " + ", ".join(f"{name} {codes[name]}" for name in order))
     if sensors:
         completed = all(m.returncode == 0 for m in sensors) and not stop and failure is None
     else:

@@ -131,10 +131,11 @@ class GraphWatcher:
         self.context = rclpy.Context()
         rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)  # bearing-graph's own
         self.node = rclpy.create_node("graph_watcher", context=self.context)
+        self._state_subscriptions = {}
         for ns, log in self.motors.items():
-            self.node.create_subscription(FaultStateMsg, topics.qualified(ns, topics.FAULT_STATE),
-                                          lambda msg, log=log: self._on_state(log, msg),
-                                          topics.qos(topics.FAULT_STATE, depth=QUEUE))
+            self._state_subscriptions[log.motor] = self.node.create_subscription(
+                FaultStateMsg, topics.qualified(ns, topics.FAULT_STATE), lambda msg, log=log: self._on_state(log, msg),
+                topics.qos(topics.FAULT_STATE, depth=QUEUE))
             self.node.create_subscription(FaultStateMsg, topics.qualified(ns, topics.TRUTH),
                                           lambda msg, log=log: self._on_truth(log, msg),
                                           topics.qos(topics.TRUTH, depth=QUEUE))
@@ -170,6 +171,19 @@ class GraphWatcher:
     @staticmethod
     def _on_chunk(log: MotorLog, msg):
         log.add_chunk(to_seconds(msg.header.stamp), np.asarray(msg.samples), msg.sample_rate)
+
+    def wait_for_diagnosers(self, timeout: float, stop, motors=None) -> list:
+        """Wait until the fault_state of each of ``motors`` (default: all) has a matched publisher,
+        its diagnoser, or ``stop``; return the motors still without one. Started before the
+        sensors, this makes sure the first decisions are received (a late match delivers only
+        the last few)."""
+        subscriptions = {m: self._state_subscriptions[m] for m in (self.motors if motors is None else motors)}
+        deadline = time.monotonic() + timeout
+        while True:
+            pending = [m for m, sub in subscriptions.items() if sub.get_publisher_count() == 0]
+            if not pending or time.monotonic() >= deadline or stop:
+                return pending
+            time.sleep(0.05)
 
     def wait_decided_to_end(self, timeout: float, stop, motors=None) -> list:
         """Wait until a fault_state covers the end of the received signal of each of ``motors``

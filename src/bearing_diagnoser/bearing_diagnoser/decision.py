@@ -78,6 +78,9 @@ class Diagnoser:
         self._tracker = StateTracker(self.config.k_of_n, self.config.normal_k_of_n, self._unknown_rule())
         self.history: list[Decision] = []
         self.keep_history = True
+        #: Hypotheses whose streams are deployed though this core has not seen them yet (a restarted
+        #: decision's earlier streams): missing, they hold the folding decision like a silent stream.
+        self.expected: set = set()
 
     # -- configuration -----------------------------------------------------------------
     def _unknown_rule(self) -> tuple[int, int]:
@@ -278,9 +281,10 @@ class Diagnoser:
                 if lead - b1 < lag_blocks:
                     break
             # a stream never seen (one observer deployed) leaves its hypothesis out; a stream that went
-            # silent (a dead observer) holds the decision: deciding without it mistakes one fault for
-            # the other (the folding statistic needs both to explain the stronger one away)
-            outage = any(h in self._streams for h in missing)
+            # silent (a dead observer) or is expected back (a restarted producer's, not yet arrived)
+            # holds the decision: deciding without it mistakes one fault for the other (the folding
+            # statistic needs both to explain the stronger one away)
+            outage = any(h in self._streams or h in self.expected for h in missing)
             wins = {h: s.window(b0, b1) for h, s in ready.items()}
             if not outage and all(win is not None and kernels.all_finite(win["env"]) for win in wins.values()):
                 st = next(iter(ready.values()))

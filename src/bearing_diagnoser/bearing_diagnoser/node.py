@@ -39,8 +39,10 @@ class DiagnoserNode(Node):
         self.session.warm_up()  # before subscribing: being subscribed means being ready
         self.pub_state = self.create_publisher(FaultStateMsg, topics.FAULT_STATE.name, topics.qos(topics.FAULT_STATE))
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
-        for h, topic in topics.RESIDUALS.items():
-            self.create_subscription(Residual, topic.name, lambda msg, h=h: self.on_residual(h, msg), topics.qos(topic))
+        self.residual_subscriptions = {
+            h: self.create_subscription(Residual, topic.name, lambda msg, h=h: self.on_residual(h, msg),
+                                        topics.qos(topic))
+            for h, topic in topics.RESIDUALS.items()}
         self.create_subscription(ShaftSpeed, topics.SHAFT_SPEED.name, lambda msg: self.session.on_speed(
             msg.angular_velocity), topics.qos(topics.SHAFT_SPEED))
         self.create_timer(float(self.values["diagnostics_period"]), self.publish_diagnostics)
@@ -56,6 +58,8 @@ class DiagnoserNode(Node):
         return self.get_clock().now().nanoseconds * 1e-9
 
     def on_residual(self, hypothesis: FaultState, msg: Residual) -> None:
+        if len(self.session.deployed) < len(self.residual_subscriptions):  # until every observer is known
+            self.session.expect(h for h, sub in self.residual_subscriptions.items() if sub.get_publisher_count())
         reports = self.session.on_residual(hypothesis, to_seconds(msg.header.stamp), msg.first_sample_index,
                                            msg.sample_rate, msg.residual, msg.estimate, msg.impulse_train,
                                            msg.fault_frequency, msg.model_set, self._now())

@@ -105,6 +105,7 @@ class DiagnoserSession:
         self.streams = {h: ChunkStream(topics.residual_topic(h).name) for h in STREAMS}
         self.core: Diagnoser | None = None
         self._fed: set = set()  # streams that fed the current core
+        self.deployed: set = set()  # streams known to be deployed (fed a core, or publisher matched)
         self.time_offset = 0.0  # stamp of sample index 0 (s)
         self.last_heard = {h: None for h in STREAMS}
         self.shaft_rpm: float | None = None
@@ -141,6 +142,7 @@ class DiagnoserSession:
                       fold=replace(cfg.fold, window_s=float(v["window"]) or cfg.fold.window_s))
         core = Diagnoser(cfg, name, load_bearing(v["bearing"]), sample_rate)
         core.keep_history = False
+        core.expected = set(self.deployed)
         self._tell_speed(core)
         what = ("window 4 cage periods of the bearing" if cfg.method == "spectral" and not v["window"]
                 else f"window {v['window'] or cfg.fold.window_s:g} s")
@@ -157,6 +159,16 @@ class DiagnoserSession:
             core.tell_speed(float(self.values["rpm"]), float(self.values["rpm_tolerance"]))
         else:
             core.tell_speed(None)
+
+    def expect(self, hypotheses) -> None:
+        """Streams whose observer is deployed (the node saw their publisher matched): the folding
+        decision holds for them instead of deciding without them while their first chunks are
+        still on their way (a late DDS match at start or after a restart)."""
+        new = set(hypotheses) - self.deployed
+        if new:
+            self.deployed |= new
+            if self.core is not None:
+                self.core.expected |= new
 
     # -- inputs ------------------------------------------------------------------------
     def on_speed(self, rad_s: float) -> None:
@@ -196,6 +208,7 @@ class DiagnoserSession:
             self._fed = set()
             self.time_offset = stamp - first_index / sample_rate
         self._fed.add(hypothesis)
+        self.deployed.add(hypothesis)
         try:
             decisions = self.core.update(hypothesis, first_index, sample_rate, r, np.asarray(estimate, float),
                                          np.asarray(train, float), fault_hz)
