@@ -150,3 +150,18 @@ def test_bearing_graph_knows_which_motors_have_a_diagnoser_in_every_layout(tmp_p
                if "/m2/diagnoser" not in p.arguments and (p.namespace, p.node_name) != ("m2", "diagnoser")]
     assert diagnosed_motors(without) == ({"m1", "m2", "m3"} - ({"m1", "m2"} if layout == "role" else {"m2"}))
     assert diagnosed_motors(single_graph()) == {""} and diagnosed_motors(single_graph("motor_7")) == {"motor_7"}
+
+
+def test_bearing_graph_makes_each_simulator_wait_for_its_watcher_too(tmp_path):
+    """A simulator's start gate (its parameters) plus the watcher's sim/truth subscription."""
+    from bearing_bringup.graph_cli import watched_gate
+    path = tmp_path / "f.yaml"
+    path.write_text(yaml.safe_dump({"motors": {"m1": {}, "m2": {"simulator": {"wait_for_subscribers": ""}}}}))
+    fleet = load_fleet(path)
+    params = parameters_file(fleet)
+    sims = {p.namespace: p for p in processes(fleet) if p.sensor}
+    base = params["/m1/simulator"]["ros__parameters"]["wait_for_subscribers"]
+    assert base and watched_gate(params, sims["m1"]) == ["-p", f"wait_for_subscribers:={base},sim/truth:1"]
+    assert watched_gate(params, sims["m2"]) == ["-p", "wait_for_subscribers:=sim/truth:1"]
+    single = yaml.safe_load(config_path().read_text())
+    assert watched_gate(single, single_graph()[0])[1].endswith(",sim/truth:1")

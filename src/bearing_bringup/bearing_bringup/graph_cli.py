@@ -33,7 +33,7 @@ import time
 
 import yaml
 
-from bearing_common import ros_env
+from bearing_common import ros_env, topics
 from bearing_common.stop_signals import StopSignals
 
 from .fleet import FleetError, default_fleet_file, load_fleet, parameters_file, processes
@@ -75,10 +75,26 @@ def diagnosed_motors(procs) -> set:
     return out
 
 
+def watched_gate(params: dict, proc) -> list:
+    """``-p wait_for_subscribers:=...`` for a simulator ``proc``: its gate from the parameters
+    (``params``, the file's content) plus the watcher's ``sim/truth`` subscription; else a short
+    scenario may end before the watcher has matched it, leaving nothing to summarise."""
+    key = f"/{proc.namespace}/{proc.node_name}" if proc.namespace else f"/{proc.node_name}"
+    spec = ""
+    for name in (key, proc.node_name, "/**"):
+        section = (params.get(name) or {}).get("ros__parameters") or {}
+        if "wait_for_subscribers" in section:
+            spec = section["wait_for_subscribers"]
+            break
+    return ["-p", "wait_for_subscribers:=" + ",".join(filter(None, (spec, f"{topics.TRUTH.name}:1")))]
+
+
 def process_argv(proc, params_file: pathlib.Path) -> list:
-    """The command line of ``proc`` (a :class:`~bearing_bringup.graph.Process`)."""
+    """The command line of ``proc`` (a :class:`~bearing_bringup.graph.Process`); a simulator also
+    waits for the watcher (:func:`watched_gate`)."""
+    gate = watched_gate(yaml.safe_load(params_file.read_text()) or {}, proc) if proc.sensor else []
     return [str(installed_executable(proc.package, proc.executable)), *proc.arguments,
-            *proc.ros_arguments(params_file)]
+            *proc.ros_arguments(params_file), *gate]
 
 
 def main(argv=None) -> int:
