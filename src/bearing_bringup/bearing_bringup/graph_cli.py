@@ -162,7 +162,7 @@ def main(argv=None) -> int:
                     group.echo(f"no diagnoser publishing after {DIAGNOSER_WAIT_S:g} s"
                                + (f" ({', '.join(unheard)})" if fleet else "") + "; starting the simulator anyway")
             for proc in runnable:
-                if proc.sensor:
+                if proc.sensor and not stop:  # Ctrl-C while waiting: no simulator to start and stop again
                     group.start(proc.name, process_argv(proc, params_file))
             for member in group.members:
                 group.echo(f"started {member.name} (pid {member.process.pid})")
