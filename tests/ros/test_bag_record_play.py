@@ -77,11 +77,16 @@ def test_record_a_publisher_and_stop_by_signal(ros_graph, tmp_path, signals):
     assert state.state == FaultState.INNER_RACE and state.stamp == 7.0 and state.scores == {"inner_race": 3.5}
 
 
+#: s of recording: the publisher sees the recorder matched before the recorder's reader may know the
+#: publisher (DDS discovery on this machine: up to 3.1 s); 3 s once recorded nothing on a cold start
+DURATION_S = 8.0
+
+
 def test_record_duration_and_namespace(ros_graph, tmp_path):
     pub = ros_graph.publisher(topics.VIBRATION, namespace="rig_a", depth=50)
     bag = tmp_path / "ns"
     recorder = ros_graph.start("", "", name="bag_record", argv=BAG_CLI + [
-        "record", "--namespace", "rig_a", "--topics", topics.VIBRATION.name, "--duration", "3",
+        "record", "--namespace", "rig_a", "--topics", topics.VIBRATION.name, "--duration", str(DURATION_S),
         "--storage", "sqlite3", "--out", str(bag)])
     ros_graph.wait_until(lambda: pub.get_subscription_count() >= 1, timeout=30.0,
                          what="the recorder to subscribe")
