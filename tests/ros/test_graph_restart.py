@@ -180,7 +180,8 @@ def test_killed_node_is_restarted_and_the_graph_keeps_running(recovery):
 
 def test_fault_states_after_recovery_are_correct(recovery):
     assert recovery.kill_to_state is not None, f"no correct fault_state within {RECOVERY_TIMEOUT_S} s"
-    assert stamp(recovery.stable[-1]) - stamp(recovery.stable[0]) >= STABLE_S
+    # as the fixture waited for it (the difference form fails on 8.04 - 5.04 = 2.9999999999999996)
+    assert stamp(recovery.stable[-1]) >= stamp(recovery.stable[0]) + STABLE_S
     false = [(round(stamp(m), 3), FaultState(m.state).name) for m in recovery.stable
              if m.state != FaultState.OUTER_RACE]
     assert not false, f"{len(false)} false states after the recovery, first {false[:5]}"
