@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from bearing_observer.kernels import fold_energy, interp_extended, run_modes
+from bearing_observer.kernels import drive_input, fold_energy, iir_filter, interp_extended, run_modes
 
 
 def test_interp_extended_matches_np_interp_inside_and_end_slopes_outside():
@@ -71,3 +71,36 @@ def test_warm_up_compiles_every_signature_the_observers_use():
             for i in range(0, y.size, 480):
                 obs.process(y[i:i + 480])
     assert {n: len(getattr(kernels, n).signatures) for n in names} == before
+
+
+def test_iir_filter_equals_lfilter_over_chunks():
+    b = np.array([0.02, -0.01, 0.03, 0.0, 0.005])
+    a = np.array([1.0, -2.1, 1.9, -0.8, 0.12])
+    x = np.random.default_rng(2).standard_normal(1500)
+    expect = signal.lfilter(b, a, x)
+    out, zi = np.empty_like(x), np.zeros(b.size - 1)
+    for lo, hi in ((0, 7), (7, 480), (480, 481), (481, 1500)):
+        iir_filter(b, a, x[lo:hi], zi, out[lo:hi])
+    np.testing.assert_allclose(out, expect, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("nk", [0, 3])
+def test_drive_input_is_the_delayed_nonlinear_train_sum(nk):
+    rng = np.random.default_rng(3)
+    comps, gains = rng.standard_normal((3, 200)), np.array([0.5, -1.2, 0.3])
+    x, y = np.array([-1.0, 0.0, 2.0]), np.array([-0.5, 0.1, 3.0])  # f(0) = 0.1: no shortcut at u = 0
+    slopes = np.diff(y) / np.diff(x)
+    u_all = gains @ comps
+    fu = np.empty_like(u_all)
+    interp_extended(x, y, slopes, u_all, fu)
+    expect_w = np.concatenate([np.zeros(nk), fu])[:200]
+    delay, u, w = np.zeros(nk), np.empty(200), np.empty(200)
+    for lo, hi in ((0, 2), (2, 150), (150, 200)):  # one block shorter than the delay
+        drive_input(comps[:, lo:hi], gains, True, x, y, slopes, delay, u[lo:hi], w[lo:hi])
+    np.testing.assert_allclose(u, u_all, rtol=1e-14)
+    np.testing.assert_array_equal(w, expect_w)
+    np.testing.assert_array_equal(delay, fu[200 - nk:])
+    off_u, off_w = np.empty(5), np.empty(5)
+    drive_input(comps[:, :5], gains, False, x, y, slopes, delay, off_u, off_w)
+    assert not off_u.any()
+    np.testing.assert_array_equal(off_w, np.concatenate([fu[200 - nk:], np.zeros(5)])[:5])

@@ -138,6 +138,86 @@ def run_modes(lam: np.ndarray, bw: np.ndarray, bz: np.ndarray, c: np.ndarray,
         out[i] = acc
 
 
+@njit(cache=True)
+def drive_input(comps: np.ndarray, gains: np.ndarray, active: bool, x: np.ndarray, y: np.ndarray,
+                slopes: np.ndarray, delay: np.ndarray, u: np.ndarray, w: np.ndarray) -> None:
+    """The observer's train input: ``u = gains @ comps``, ``w = q^-nk f(u)`` (thesis Fig. 3.1).
+
+    ``u[i] = sum_j gains[j] comps[j, i]`` (in order of ``j``), ``f`` the piecewise-linear
+    input nonlinearity of :func:`interp_extended` through ``(x, y)``, and the pure delay of
+    ``nk = delay.size`` samples: ``w[i] = delay[i]`` for ``i < nk``, ``f(u[i - nk])`` after;
+    ``delay`` then holds the last ``nk`` values of ``f(u)`` for the next block. Not
+    ``active`` (the drive off): ``u = 0`` and ``f(u)`` counts as 0, nothing is injected.
+
+    Parameters
+    ----------
+    comps : ndarray, shape (p, n)
+        Unit regressor trains (dimensionless).
+    gains : ndarray, shape (p,)
+        Train gains (units of ``u``).
+    x, y, slopes : ndarray
+        Breakpoints and segment slopes of ``f`` (see :func:`interp_extended`).
+    delay : ndarray, shape (nk,)
+        ``f(u)`` of the last ``nk`` samples of the previous block; updated in place.
+    u, w : ndarray, shape (n,)
+        Drive and delayed nonlinear input, written in place.
+    """
+    n = u.size
+    nk = delay.size
+    last = x.size - 2
+    j = 0
+    fu = np.zeros(n)
+    for i in range(n if active else 0):
+        acc = 0.0
+        for k in range(gains.size):
+            acc += gains[k] * comps[k, i]
+        u[i] = acc
+        while j > 0 and acc < x[j]:
+            j -= 1
+        while j < last and acc >= x[j + 1]:
+            j += 1
+        fu[i] = slopes[j] * (acc - x[j]) + y[j]
+    if not active:
+        u[:] = 0.0
+    for i in range(n):
+        w[i] = delay[i] if i < nk else fu[i - nk]
+    if nk:
+        if n >= nk:
+            delay[:] = fu[n - nk:]
+        else:
+            delay[:nk - n] = delay[n:].copy()
+            delay[nk - n:] = fu
+
+
+@njit(cache=True)
+def iir_filter(b: np.ndarray, a: np.ndarray, x: np.ndarray, zi: np.ndarray, out: np.ndarray) -> None:
+    """``B(q)/A(q)`` applied to ``x`` in transposed direct form II, state carried in ``zi``.
+
+    The recursion of ``scipy.signal.lfilter(b, a, x, zi=zi)``: ``b`` and ``a`` of equal length
+    ``K >= 2`` (zero-padded), ``a[0] = 1``; ``out[i] = zi[0] + b[0] x[i]``, then
+    ``zi[k] = zi[k + 1] + b[k + 1] x[i] - a[k + 1] out[i]`` (``zi[K - 1]`` counting as 0).
+
+    Parameters
+    ----------
+    b, a : ndarray, shape (K,)
+        Numerator and denominator, ``a[0] = 1``.
+    x : ndarray, shape (n,)
+        Input.
+    zi : ndarray, shape (K - 1,)
+        Filter state; updated in place.
+    out : ndarray, shape (n,)
+        Output, written in place.
+    """
+    m = zi.size
+    for i in range(x.size):
+        xi = x[i]
+        yi = zi[0] + b[0] * xi
+        for k in range(m - 1):
+            zi[k] = zi[k + 1] + b[k + 1] * xi - a[k + 1] * yi
+        zi[m - 1] = b[m] * xi - a[m] * yi
+        out[i] = yi
+
+
 def warm_up() -> None:
     """Compile (first run after an install) or load from numba's cache every kernel, with
     the argument types the observer uses. A node calls this before it subscribes, so that
@@ -148,5 +228,8 @@ def warm_up() -> None:
     add_pulses(np.zeros((2, 8)), np.array([1.5]), np.array([2.5]), np.ones((2, 1)), 2)
     interp_extended(np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), np.array([1.0]), z, out)
     fold_energy(z, 0, 0.0, 100.0, 48000.0, 4)
+    drive_input(np.zeros((1, 8)), np.ones(1), True, np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), np.array([1.0]),
+                np.zeros(1), z, out)
+    iir_filter(np.ones(2), np.ones(2), z, np.zeros(1), out)
     modes = np.zeros(1, dtype=complex)
     run_modes(modes, modes, modes, modes, np.ones(1), 0.0, z, z, np.zeros(1, dtype=complex), out)

@@ -15,8 +15,8 @@ difference equation)::
 with ``(A, B, C, D)`` a balanced realization of ``B(q)/F(q)`` (the pure delay ``q^-nk`` is
 applied to ``w`` by a carried sample buffer, not kept in the state vector). Substituting,
 ``z_hat`` is the output of one LTI system with two inputs, ``w`` and ``z_tilde``, and state
-matrix ``A - L C``. With ``L = 0`` that system is ``B/F`` driven by ``w`` alone, run by
-``scipy.signal.lfilter``; otherwise it is run in modal form (:class:`.realization.ModalFilter`,
+matrix ``A - L C``. With ``L = 0`` that system is ``B/F`` driven by ``w`` alone, run as a
+difference equation (:func:`.kernels.iir_filter`); otherwise it is run in modal form (:class:`.realization.ModalFilter`,
 a compiled loop). Both carry their state between calls, so chunked processing equals
 one-shot processing, and no per-sample Python loop runs.
 
@@ -63,14 +63,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft as sp_fft
-from scipy import signal
 
 from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.states import parse_fault
 
 from .hw_model import HWModel, same_bearing
 from .impulse_trains import TWO_PI, impulse_train, modulated_train_components
-from .kernels import fold_energy
+from .kernels import drive_input, fold_energy, iir_filter
 from .model_sets import NONE, load_model_set
 from .realization import ModalFilter, balanced_realization, observer_gain
 
@@ -185,12 +184,12 @@ class FaultObserver:
         self.A, self.B, self.C, self.D = A, B, C, D
         self.L, self.observer_poles = observer_gain(A, C, poles, contraction)
         Ao = A - self.L @ C
-        if np.any(self.L):
-            self._modal = ModalFilter(Ao, B - self.L @ D, self.L, C, D)
-        else:
-            # L = 0: z_hat = B/F w exactly; run the identified polynomials directly.
-            self._modal = None
-        self._tf_w = (model.b, model.f) if not np.any(self.L) else None
+        self._modal = ModalFilter(Ao, B - self.L @ D, self.L, C, D) if np.any(self.L) else None
+        # L = 0: z_hat = B/F w exactly; the identified polynomials run directly (zero-padded
+        # to one length, normalised to f[0] = 1)
+        k = max(model.b.size, model.f.size)
+        self._iir = (np.pad(model.b, (0, k - model.b.size)) / model.f[0],
+                     np.pad(model.f, (0, k - model.f.size)) / model.f[0])
         self._template_cache = {}  # folded unit-impulse response energy (phase estimation)
         self._noise_gain = None
         self._fixed_phase = phase
@@ -246,8 +245,7 @@ class FaultObserver:
         """Zero the observer state and forget the phase/amplitude estimates."""
         if self._modal is not None:
             self._modal.reset()
-        if self._tf_w is not None:
-            self._zi_tf = np.zeros(max(self.model.b.size, self.model.f.size) - 1)
+        self._zi_tf = np.zeros(self._iir[0].size - 1)
         self._delay_buf = np.zeros(self.model.nk)
         self._n = 0                      # samples processed since reset
         # Cycle coordinates (fault psi, shaft chi, in cycles) are computed from the absolute
@@ -258,10 +256,10 @@ class FaultObserver:
         self._win_z = np.zeros(0)        # recent z_tilde
         if self.drive_mode == "fixed":
             self._phase_c = float(-self._fixed_phase / TWO_PI) % 1.0
-            self._gains = self._fixed_gains.copy()
+            self._set_gains(self._fixed_gains.copy())
         else:
             self._phase_c = 0.0          # impact cycle position estimate (cycles)
-            self._gains = np.zeros(3 if self.model.modulated else 1)
+            self._set_gains(np.zeros(3 if self.model.modulated else 1))
         self.explained = 0.0
         self._cached_trains = None
 
@@ -384,33 +382,30 @@ class FaultObserver:
         e = float(zw @ zw)
         res_energy = max(e - 2.0 * float(p @ r) + float(p @ G @ p), 0.0)
         self.explained = 1.0 - res_energy / e if e > 0 else 0.0
-        self._gains = p if self.explained >= self.min_explained else np.zeros_like(p)
+        self._set_gains(p if self.explained >= self.min_explained else np.zeros_like(p))
+
+    def _set_gains(self, gains: np.ndarray) -> None:
+        """Train gains from now on; the drive is on when any is non-zero (and not ``drive="off"``)."""
+        self._gains = gains
+        self._driving = self.drive_mode != "off" and bool(np.any(gains))
 
     def _process_block(self, y: np.ndarray, out_est, out_train, out_drive, sl) -> None:
         n = y.size
         g = self.model.output_nonlinearity
+        f = self.model.input_nonlinearity
         z_t = g.inverse(y)
         unit, comps = self._block_trains(n)
-        if self.drive_mode == "off" or not np.any(self._gains):
-            u = np.zeros(n)
-        else:
-            u = self._gains @ comps
-        w = self.model.input_nonlinearity(u) if np.any(u) else np.zeros(n)
-        nk = self.model.nk
-        if nk:
-            wd = np.concatenate([self._delay_buf, w])
-            self._delay_buf = wd[-nk:].copy()
-            w = wd[:n]
-        zhat = np.zeros(n)
-        if self._tf_w is not None and self._zi_tf.size:
-            zhat, self._zi_tf = signal.lfilter(self._tf_w[0], self._tf_w[1], w, zi=self._zi_tf)
-        elif self._tf_w is not None:
-            zhat = self._tf_w[0][0] * w
+        u, w, zhat = out_drive[sl], np.empty(n), np.empty(n)
+        # w = q^-nk f(u) while the drive is on, else 0 (nothing injected)
+        drive_input(comps, self._gains, self._driving, f.x, f.y, f.slopes, self._delay_buf, u, w)
         if self._modal is not None:
             zhat = self._modal.run(w, z_t)
+        elif self._zi_tf.size:
+            iir_filter(self._iir[0], self._iir[1], w, self._zi_tf, zhat)
+        else:  # a static gain B/F = b0 / f0
+            np.multiply(w, self._iir[0][0] / self._iir[1][0], out=zhat)
         out_est[sl] = g(zhat)
         out_train[sl] = unit
-        out_drive[sl] = u
         # bookkeeping: sample count and the estimation window
         self._n += n
         if self.drive_mode in ("adaptive", "phase"):

@@ -35,7 +35,7 @@ class MonotonePiecewiseLinear:
             raise ValueError("breakpoints must be strictly increasing in x and in y")
         self.x = x
         self.y = y
-        self._slopes = np.diff(y) / np.diff(x)
+        self.slopes = np.diff(y) / np.diff(x)  #: segment slopes (units of y per unit of x)
         self._inverse_slopes = np.diff(x) / np.diff(y)
 
     @classmethod
@@ -52,7 +52,7 @@ class MonotonePiecewiseLinear:
 
     def __call__(self, v):
         """Evaluate ``g(v)`` (vectorised, any shape)."""
-        return _evaluate(self.x, self.y, self._slopes, v)
+        return _evaluate(self.x, self.y, self.slopes, v)
 
     def inverse(self, w):
         """Evaluate ``g^-1(w)`` (vectorised, any shape)."""
@@ -61,7 +61,7 @@ class MonotonePiecewiseLinear:
     def slope_at(self, v: float) -> float:
         """Local slope dg/dv at ``v`` (right derivative)."""
         i = int(np.clip(np.searchsorted(self.x, v, side="right") - 1, 0, self.x.size - 2))
-        return float(self._slopes[i])
+        return float(self.slopes[i])
 
     def is_identity(self, tol: float = 1e-12) -> bool:
         """True when the function is ``v -> v`` within ``tol``."""
