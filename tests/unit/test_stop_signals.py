@@ -1,7 +1,11 @@
-"""StopSignals: a signal sets the flag (no KeyboardInterrupt); later ones are ignored, also after the block."""
+"""StopSignals: a signal sets the flag (no KeyboardInterrupt); later ones are ignored, also after the block;
+a stop that stalls ends the process with the stacks printed."""
 
 import os
 import signal
+import subprocess
+import sys
+import time
 
 import pytest
 
@@ -31,3 +35,29 @@ def test_handlers_are_restored_when_no_stop_was_requested():
         assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+
+
+STALLING_PROCESS = """
+import os, signal, sys, time
+from bearing_common.stop_signals import StopSignals
+with StopSignals(stall_s=0.5) as stop:
+    os.kill(os.getpid(), signal.SIGTERM)
+    time.sleep(0.05)
+    os.kill(os.getpid(), signal.SIGINT)  # a second signal (Ctrl-C under ros2 launch): still quiet
+    time.sleep(float(sys.argv[1]))  # the clean-up: hangs (10 s) or is quick (0 s)
+print("left", bool(stop))
+"""
+
+
+@pytest.mark.parametrize("cleanup_s, code", [(10.0, 1), (0.0, 0)])
+def test_a_stop_that_stalls_prints_the_stacks_and_exits_1(cleanup_s, code):
+    start = time.monotonic()
+    run = subprocess.run([sys.executable, "-c", STALLING_PROCESS, str(cleanup_s)], capture_output=True, text=True,
+                         timeout=30)
+    assert run.returncode == code, run.stderr
+    if code:
+        assert time.monotonic() - start < 5.0
+        assert "most recent call first" in run.stderr
+        assert "left" not in run.stdout
+    else:
+        assert run.stdout.strip() == "left True" and not run.stderr

@@ -12,9 +12,10 @@
   destroyed and rclpy shut down.
 * Invalid parameters (ValueError while building the node) give one line on stderr
   and exit code 2.
-* A stop still under way ``STOP_STALL_S`` after it was requested prints the stack of
-  every thread on stderr (``faulthandler``): where a hung clean-up hangs, in the log a
-  supervisor keeps before it escalates to SIGKILL.
+* A stop still under way ``STOP_STALL_S`` after the signal prints the stack of every
+  thread on stderr and ends the process with exit code 1 (``StopSignals(stall_s=...)``):
+  where a hung clean-up or callback hung, in the log, before a supervisor escalates to
+  SIGKILL at 5 s.
 
 A node with a run loop of its own passes ``run(node, stop)``, which must return soon
 after ``stop`` becomes true (within ``POLL_S``, as the default spin does). Several nodes
@@ -22,14 +23,13 @@ in one process (:func:`run_nodes_main`: the fleet's multi-node processes) share 
 single-threaded executor, and each node's hook is called.
 """
 
-import faulthandler
 import signal
 import sys
 
 from .stop_signals import StopSignals
 
 POLL_S = 0.1  #: s, longest a stop request waits for the default spin to notice it
-STOP_STALL_S = 4.0  #: s, a stop taking longer prints every thread's stack (supervisors escalate at 5 s)
+STOP_STALL_S = 4.0  #: s, a stop taking longer prints every thread's stack and exits 1
 
 
 def spin_until(nodes, stop) -> None:
@@ -73,7 +73,7 @@ def run_nodes_main(program: str, make_nodes, run=None, args=None) -> int:
     import rclpy
     from rclpy.signals import SignalHandlerOptions
 
-    with StopSignals() as stop:
+    with StopSignals(stall_s=STOP_STALL_S) as stop:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         nodes = []
         try:
@@ -84,7 +84,6 @@ def run_nodes_main(program: str, make_nodes, run=None, args=None) -> int:
                 return 2
             (run or spin_until)(nodes, stop)
             if stop:
-                faulthandler.dump_traceback_later(STOP_STALL_S)
                 nodes[0].get_logger().info(f"{signal.Signals(stop.signal).name} received: stopping")
             for node in nodes:
                 hook = getattr(node, "on_shutdown", None)
@@ -94,5 +93,4 @@ def run_nodes_main(program: str, make_nodes, run=None, args=None) -> int:
             for node in nodes:
                 node.destroy_node()
             rclpy.try_shutdown()
-            faulthandler.cancel_dump_traceback_later()
     return 0

@@ -9,11 +9,22 @@ the same reason, once a stop was requested, leaving the ``with`` block makes the
 signals ignored until the process exits (Python resets its own handlers to the
 default, deadly, action while it finalizes; an ignored signal stays ignored);
 without a stop the previous handlers return.
+
+With ``stall_s`` (a process's main: a stop is its end), a process still running
+``stall_s`` seconds after the stop signal arrived prints the stack of every thread on
+stderr and exits with code 1 (``faulthandler``): a clean-up, a callback or the
+interpreter's exit that hangs says where, instead of waiting for SIGKILL. The clock starts
+when the signal arrives, even while the main thread is blocked in C code where Python's
+handler cannot run yet (a thread waits on the signal wake-up descriptor), and keeps
+running after the ``with`` block, through the process's exit.
 """
 
 from __future__ import annotations
 
+import faulthandler
+import os
 import signal
+import threading
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -21,14 +32,34 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 class StopSignals:
     """True once SIGINT or SIGTERM arrived (``signal`` says which came first)."""
 
-    def __init__(self):
+    def __init__(self, stall_s: float | None = None):
         self.signal: int | None = None
         self._old = {}
+        self._stall_s = stall_s
+        self._wakeup: tuple[int, int] | None = None
+        self._old_wakeup_fd = -1
 
     def __enter__(self) -> StopSignals:
         for sig in STOP_SIGNALS:
             self._old[sig] = signal.signal(sig, self._handle)
+        if self._stall_s is not None:
+            self._wakeup = os.pipe()
+            os.set_blocking(self._wakeup[1], False)
+            self._old_wakeup_fd = signal.set_wakeup_fd(self._wakeup[1], warn_on_full_buffer=False)
+            threading.Thread(target=self._watch, args=(self._wakeup[0],), name="stop-stall", daemon=True).start()
         return self
+
+    def _watch(self, fd: int) -> None:
+        """Arm the stall timer when the first stop signal's number arrives on the wake-up pipe;
+        drain the pipe until its write end closes (a later signal must find a reader)."""
+        armed = False
+        try:
+            while byte := os.read(fd, 1):
+                if byte[0] in STOP_SIGNALS and not armed:
+                    faulthandler.dump_traceback_later(self._stall_s, exit=True)
+                    armed = True
+        finally:
+            os.close(fd)
 
     def _handle(self, signum, _frame) -> None:
         if self.signal is None:
@@ -37,6 +68,10 @@ class StopSignals:
     def __exit__(self, *exc) -> None:
         for sig, old in self._old.items():
             signal.signal(sig, old if self.signal is None else signal.SIG_IGN)
+        if self._wakeup is not None:
+            signal.set_wakeup_fd(self._old_wakeup_fd)
+            os.close(self._wakeup[1])  # the watcher's read returns: it ends
+            self._wakeup = None
 
     def __bool__(self) -> bool:
         return self.signal is not None
