@@ -68,6 +68,25 @@ def test_states_and_diagnostics_follow_the_residuals(ros_graph):
     assert node.returncode is None
 
 
+def test_a_diagnoser_started_late_decides_from_the_residuals_history(ros_graph):
+    """Residuals are transient local (keep last 50): a diagnoser whose reader matches after the
+    observers began publishing (a cold start's late DDS match, a restart) still gets their last
+    0.5 s and dates the fault from the stream's start."""
+    states = ros_graph.subscribe(topics.FAULT_STATE)
+    pub_or = ros_graph.publisher(topics.RESIDUAL_OUTER_RACE, depth=50)
+    pub_ir = ros_graph.publisher(topics.RESIDUAL_INNER_RACE, depth=50)
+    y = signal_normal_then_or()
+    for i in range(len(y) // N):  # 40 chunks, all before the diagnoser exists
+        pub_or.publish(residual_msg(1, i, y[i * N:(i + 1) * N], BPFO))
+        pub_ir.publish(residual_msg(2, i, y[i * N:(i + 1) * N], BPFI))
+    ros_graph.start("bearing_diagnoser", "diagnoser")
+    ros_graph.wait_until(lambda: any(m.state == FaultState.OUTER_RACE for m in states), 30.0,
+                         "OUTER_RACE from the history")
+    first_or = next(m for m in states if m.state == FaultState.OUTER_RACE)
+    assert 0.17 <= first_or.onset.sec + first_or.onset.nanosec * 1e-9 <= 0.25
+    assert states[0].state == FaultState.NORMAL  # the first window, at the stream's start, was decided
+
+
 def test_one_silent_observer_is_reported_and_decisions_continue(ros_graph):
     states = ros_graph.subscribe(topics.FAULT_STATE)
     diags = ros_graph.subscribe(topics.DIAGNOSTICS)

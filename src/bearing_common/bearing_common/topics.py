@@ -6,9 +6,15 @@ are relative (a namespace per machine works), except the ROS-wide ``/diagnostics
 
 QoS, chosen on purpose:
 
-* sample streams (vibration, unbalance, residuals): reliable, keep last 50 — a consumer
-  that is briefly busy loses nothing (a 0.01 s chunk every 10 ms: 0.5 s of slack), and
-  a late joiner does not get stale signal;
+* measured sample streams (vibration, unbalance): reliable, volatile, keep last 50 — a
+  consumer that is briefly busy loses nothing (a 0.01 s chunk every 10 ms: 0.5 s of
+  slack), and a late joiner does not get stale signal;
+* residuals: reliable, transient local, keep last 50 — the same slack, and a diagnoser
+  whose reader matches an observer late (at a cold start the observers may publish before
+  their writers have discovered the diagnoser's reader, whatever the graph already shows)
+  or that starts after the observers still gets their last 0.5 s: it decides from the
+  stream's start instead of losing it (each chunk carries its sample index and stamp, so
+  history is never mistaken for new signal);
 * ``shaft_speed``: reliable, keep last 10 (slow, only the latest matters);
 * ``fault_state``: reliable, transient local, keep last 10 — a late ``ros2 topic echo``
   gets the current state (the last of at most 10 recent decisions), and a burst of
@@ -55,8 +61,8 @@ VIBRATION = Topic("vibration/drive_end", "bearing_msgs/msg/VibrationChunk", 50)
 UNBALANCE = Topic("unbalance", "bearing_msgs/msg/VibrationChunk", 50)
 SHAFT_SPEED = Topic("shaft_speed", "bearing_msgs/msg/ShaftSpeed", 10)
 TRUTH = Topic("sim/truth", "bearing_msgs/msg/FaultState", 10, latched=True)
-RESIDUAL_OUTER_RACE = Topic("residual/outer_race", "bearing_msgs/msg/Residual", 50)
-RESIDUAL_INNER_RACE = Topic("residual/inner_race", "bearing_msgs/msg/Residual", 50)
+RESIDUAL_OUTER_RACE = Topic("residual/outer_race", "bearing_msgs/msg/Residual", 50, latched=True)
+RESIDUAL_INNER_RACE = Topic("residual/inner_race", "bearing_msgs/msg/Residual", 50, latched=True)
 FAULT_STATE = Topic("fault_state", "bearing_msgs/msg/FaultState", 10, latched=True)
 FLEET_STATE = Topic("fleet_state", "bearing_msgs/msg/FleetState", 1, latched=True)
 DIAGNOSTICS = Topic("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", 10)
