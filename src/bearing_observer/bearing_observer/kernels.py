@@ -228,8 +228,9 @@ def warm_up() -> None:
     add_pulses(np.zeros((2, 8)), np.array([1.5]), np.array([2.5]), np.ones((2, 1)), 2)
     interp_extended(np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), np.array([1.0]), z, out)
     fold_energy(z, 0, 0.0, 100.0, 48000.0, 4)
-    drive_input(np.zeros((1, 8)), np.ones(1), True, np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), np.array([1.0]),
-                np.zeros(1), z, out)
+    f = (np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), np.array([1.0]))
+    for comps in (np.zeros((1, 8)), np.zeros((3, 16))[:, 4:12]):  # the train cache's slices: either layout
+        drive_input(comps, np.ones(comps.shape[0]), True, *f, np.zeros(1), z, out)
     iir_filter(np.ones(2), np.ones(2), z, np.zeros(1), out)
     modes = np.zeros(1, dtype=complex)
     run_modes(modes, modes, modes, modes, np.ones(1), 0.0, z, z, np.zeros(1, dtype=complex), out)
