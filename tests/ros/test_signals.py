@@ -37,7 +37,7 @@ def send(pgid: int, mode: str) -> None:
 def assert_clean_exit(member) -> None:
     try:
         code = member.process.wait(timeout=STOP_TIMEOUT_S)
-    except subprocess.TimeoutExpired:  # its output then holds the stacks node_main dumps on a stalled stop
+    except subprocess.TimeoutExpired:  # not even node_main's stall watchdog (stacks, exit 1 at 4 s) ended it
         code = None
     member.reader.join(timeout=2.0)
     text = "\n".join(member.lines)

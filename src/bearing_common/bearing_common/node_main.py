@@ -13,8 +13,8 @@
 * Invalid parameters (ValueError while building the node) give one line on stderr
   and exit code 2.
 * A stop still under way ``STOP_STALL_S`` after the signal prints the stack of every
-  thread on stderr and ends the process with exit code 1 (``StopSignals(stall_s=...)``):
-  where a hung clean-up or callback hung, in the log, before a supervisor escalates to
+  thread on stderr and ends the process with exit code 1 (``StopSignals(stall_s=...)``),
+  so the log says where a clean-up or callback hung, before a supervisor escalates to
   SIGKILL at 5 s.
 
 A node with a run loop of its own passes ``run(node, stop)``, which must return soon
