@@ -1,11 +1,12 @@
 """Every window decision on the thesis cases and the development recordings, to check that a change keeps them.
 
 ``python -m benchmarks.decision_dump dump OUT.pkl`` writes, per run, each window's
-(window end, label, published state, confidence, onset, changed, detail, scores): the
+(window end, label, published state, confidence, onset, changed, detail, scores) and the
+JSON lines ``bearing-diagnose`` prints: the
 thesis' eight cases from the simulator (48 kHz noise-free, with sensor noise, at 1500 rpm,
 and 12 kHz with noise) and every recording of ``shared_data.yaml``, each with the model
 and the envelope method. ``python -m benchmarks.decision_dump compare BEFORE.pkl AFTER.pkl``
-exits 1 when any label, state, change flag or detail differs, and reports how many scores
+exits 1 when any label, state, change flag, detail or JSON line differs, and reports how many scores
 are bit-identical and the largest relative difference of the others. Compare dumps made
 with one build of the simulator: its output is the same in every process of a build, but
 once differed by 1e-4 (its tolerance) between the first run after a build and later ones.
@@ -33,6 +34,11 @@ def _windows(result) -> list[tuple]:
              dict(d.scores)) for d in result.decisions]
 
 
+def _run(result) -> dict:
+    """A run's windows and the JSON lines ``bearing-diagnose`` prints for it."""
+    return {"windows": _windows(result), "segments": [s.to_json() for s in result.segments]}
+
+
 def dump() -> dict:
     """{run: windows, or the error message}, for every run named in the module docstring."""
     out: dict = {}
@@ -40,12 +46,12 @@ def dump() -> dict:
         for rpm, noise, fs in SIMULATED:
             rec = simulate_case(name, rpm, noise, sample_rate=fs)
             for method in METHODS:
-                out[("sim", name, rpm, noise, fs, method)] = _windows(diagnose_recording(rec, method=method))
+                out[("sim", name, rpm, noise, fs, method)] = _run(diagnose_recording(rec, method=method))
     for entry in load_manifest(MANIFEST):
         rec = entry.load()
         for method in METHODS:
             try:
-                out[("rec", entry.dataset, entry.name, method)] = _windows(
+                out[("rec", entry.dataset, entry.name, method)] = _run(
                     diagnose_recording(rec, method=method, rpm=rec.rpm, bearing=entry.bearing))
             except Exception as exc:  # an input refused before is refused after, with the same reason
                 out[("rec", entry.dataset, entry.name, method)] = repr(exc)
@@ -60,9 +66,13 @@ def compare(before: dict, after: dict) -> int:
     differing, windows, same, scores, worst = 0, 0, 0, 0, (0.0, None)
     for run, a in before.items():
         b = after[run]
-        if isinstance(a, str) or isinstance(b, str) or len(a) != len(b):
+        if isinstance(a, str) or isinstance(b, str) or len(a["windows"]) != len(b["windows"]):
             differing += int(a != b)
             continue
+        if a["segments"] != b["segments"]:
+            differing += 1
+            print("segments differ:", run)
+        a, b = a["windows"], b["windows"]
         for x, y in zip(a, b):
             windows += 1
             if x[:3] != y[:3] or x[5:7] != y[5:7] or x[7].keys() != y[7].keys():
