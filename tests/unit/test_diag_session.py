@@ -5,7 +5,7 @@ import pytest
 
 from bearing_common.states import FaultState
 from bearing_diagnoser.diagnoser_node_config import LEVEL_OK, LEVEL_STALE, LEVEL_WARN, PARAMETERS
-from bearing_diagnoser.session import SPEED_UNKNOWN, DiagnoserSession
+from bearing_diagnoser.diagnoser_session import SPEED_UNKNOWN, DiagnoserSession
 
 FS = 12000.0
 

@@ -1,6 +1,6 @@
 """Bad input tried systematically (property-based, hypothesis): message callbacks and file loaders.
 
-* the diagnoser's residual callback (:class:`bearing_diagnoser.session.DiagnoserSession`, what the
+* the diagnoser's residual callback (:class:`bearing_diagnoser.diagnoser_session.DiagnoserSession`, what the
   node calls for every message) with chunks of random size (empty to huge), NaN/inf samples,
   zero/negative/absurd sample rates, stamps backwards and far in the future, unknown model sets
   and arrays of unequal length: nothing raises, nothing non-finite is published, every
@@ -34,7 +34,7 @@ from hypothesis import strategies as st
 from bearing_common.bearings import BearingError, load_bearing
 from bearing_common.states import FaultState
 from bearing_diagnoser.diagnoser_node_config import PARAMETERS
-from bearing_diagnoser.session import DiagnoserSession
+from bearing_diagnoser.diagnoser_session import DiagnoserSession
 from bearing_diagnoser.synthetic import burst_train, white_noise
 from bearing_observer.observer_session import ObserverSession
 from bearing_recordings.load import load_recording

@@ -45,11 +45,11 @@ class _OneLine(logging.Formatter):
 
 def main(argv=None) -> int:
     """Run the CLI; returns the exit status (0 on success)."""
-    from bearing_common.bearings import BearingError
+    from bearing_common.bearings import BearingError, load_bearing
     from bearing_recordings.load import load_recording
     from bearing_recordings.recording import InputError
 
-    from .offline import diagnose_recording
+    from .recording_diagnosis import diagnose_recording
 
     args = build_parser().parse_args(argv)
     handler = logging.StreamHandler(sys.stderr)
@@ -63,8 +63,9 @@ def main(argv=None) -> int:
                              units=args.units)
         for note in rec.notes or ():
             log.info(note)
-        res = diagnose_recording(rec, model_set=args.model_set, method=args.method, rpm=args.rpm,
-                                 bearing=args.bearing, keep_streams=bool(args.plot))
+        bearing = load_bearing(args.bearing) if args.bearing else rec.bearing
+        res = diagnose_recording(rec, model_set=args.model_set, method=args.method, rpm=args.rpm, bearing=bearing,
+                                 keep_streams=bool(args.plot))
     except (InputError, BearingError) as exc:
         print(f"bearing-diagnose: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

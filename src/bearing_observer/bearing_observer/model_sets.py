@@ -26,14 +26,14 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from bearing_common.bearings import CATALOG, DEFAULT_BEARING, Bearing, load_bearing
+from bearing_common.bearings import DEFAULT_BEARING, Bearing, load_bearing
+from bearing_common.model_set_info import NONE, SHIPPED_SETS
 from bearing_common.states import parse_fault
 
 from .hw_model import FAULT_TYPES, HWModel, ModelFileError, load, same_bearing
 from .piecewise_linear import MonotonePiecewiseLinear
 
 MODELS_DIR = Path(__file__).resolve().parent / "models"
-NONE = "none"
 
 #: Time constant (s) of the impact response the ``none`` set assumes for its phase
 #: estimate: the energy of a ring-down of a few housing-resonance cycles (2-10 kHz).
@@ -65,11 +65,9 @@ class ModelSet:
     directory: Path | None
 
 
-SHIPPED = {s.name: s for s in (
-    ModelSet("sim_48k", 48000.0, "simulator", CATALOG["6205"], MODELS_DIR / "sim_48k"),
-    ModelSet("sim_12k", 12000.0, "simulator", CATALOG["6205"], MODELS_DIR / "sim_12k"),
-    ModelSet("cwru_de_6205", 12000.0, "cwru", CATALOG["6205"], MODELS_DIR / "cwru_de_6205"),
-)}
+#: The shipped sets (:data:`bearing_common.model_set_info.SHIPPED_SETS`) with their files.
+SHIPPED = {s.name: ModelSet(s.name, s.sample_rate, s.source, s.bearing, MODELS_DIR / s.name)
+           for s in SHIPPED_SETS.values()}
 NO_MODEL = ModelSet(NONE, None, None, None, None)
 
 

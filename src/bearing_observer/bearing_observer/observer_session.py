@@ -8,7 +8,7 @@ One :class:`ObserverSession` per node:
   rate change or when ``bearing`` / ``model_set`` are set (:meth:`configure`);
 * re-tunes the train to shaft-speed messages that differ by more than
   ``speed_tolerance`` (relative), phase kept continuous;
-* checks every chunk (:class:`.chunk_stream.ChunkStream`): bad chunks are rejected and
+* checks every chunk (:class:`bearing_common.chunk_stream.ChunkStream`): bad chunks are rejected and
   counted; a gap or a restarted producer resets the observer state;
 * never returns a non-finite value.
 
@@ -27,10 +27,10 @@ import numpy as np
 
 from bearing_common import topics
 from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.chunk_stream import ChunkStream
 from bearing_common.log_throttle import LogThrottle
 from bearing_common.states import FaultState
 
-from .chunk_stream import ChunkStream
 from .hw_model import ModelFileError
 from .model_sets import choose_model_set
 from .observer import BearingMismatchWarning, FaultObserver

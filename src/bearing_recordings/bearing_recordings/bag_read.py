@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from bearing_common import topics
+from bearing_common.bearings import Bearing, BearingError, load_bearing
 from bearing_common.stamps import to_seconds
 from bearing_common.units import sample_rate_problem
 
@@ -233,9 +234,21 @@ def bag_namespace_hint(path) -> str | None:
     return _custom(path, CUSTOM_NAMESPACE)
 
 
-def bag_bearing(path) -> str:
-    """The bearing ``bearing-bag from-mat`` stored in the bag's custom_data, else ""."""
+def bag_bearing_spec(path) -> str:
+    """The bearing description ``bearing-bag from-mat`` stored in the bag's custom_data, else ""."""
     return _custom(path, CUSTOM_BEARING) or ""
+
+
+def bag_bearing(path) -> Bearing | None:
+    """The bearing ``bearing-bag from-mat`` stored in the bag (:func:`bag_bearing_spec`), else None;
+    BagError when what is stored is not a bearing."""
+    spec = bag_bearing_spec(path)
+    if not spec:
+        return None
+    try:
+        return load_bearing(spec)
+    except BearingError as exc:
+        raise BagError(f"{path}: the bearing stored in the bag is not usable: {exc}") from None
 
 
 def read_bag(path, namespace: str | None = None, vibration_topic: str = topics.VIBRATION.name) -> BagContents:

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bearing_common.bearings import Bearing
 from bearing_common.units import sample_rate_problem
 
 #: Longest recording a loader accepts (samples): 1 hour at 100 kHz (2.9 GB as float64).
@@ -46,9 +47,9 @@ class Recording:
         to the first sample.
     notes : list of str
         What the loader assumed (units, speed), for the user's log.
-    bearing : str
-        The bearing the recording monitors, when the file says (a catalog name or
-        description: MFPT files, the CWRU channel's end, bags written by ``bearing-bag``), else "".
+    bearing : Bearing or None
+        The bearing the recording monitors, when the file says (MFPT files, the CWRU
+        channel's end, bags written by ``bearing-bag``), parsed by the loader; else None.
     """
 
     accel: np.ndarray
@@ -60,7 +61,7 @@ class Recording:
     path: str = ""
     start_time: float = 0.0
     notes: list | None = None
-    bearing: str = ""
+    bearing: Bearing | None = None
 
     @property
     def duration(self) -> float:

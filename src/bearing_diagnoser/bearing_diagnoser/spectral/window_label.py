@@ -2,7 +2,7 @@
 
 Test: with α the stated false-alarm probability per window (all hypotheses together),
 hypothesis h is significant when p_h < α/3 (Bonferroni over OUTER_RACE, INNER_RACE, BALL;
-p_h already pays for the slip search and the band choice, :mod:`.fault_lines`).
+p_h already pays for the slip search and the band choice, :mod:`.fault_combs`).
 
 Confidence: each p-value becomes the Sellke-Bayarri-Berger bound on its Bayes factor
 against noise, BF(p) = 1/(−e·p·ln p), and the prior odds of each fault against NORMAL are

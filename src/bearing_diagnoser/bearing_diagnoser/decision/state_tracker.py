@@ -24,6 +24,8 @@ import numpy as np
 
 from bearing_common.states import FaultState
 
+from .scores import WindowScores
+
 
 @dataclass
 class Decision:
@@ -43,8 +45,9 @@ class Decision:
     confidence: float
     onset: float
     changed: bool
-    scores: dict[str, float] = field(default_factory=dict)
+    scores: WindowScores = field(default_factory=WindowScores)
     detail: str = ""
+    sensor_problem: str = ""
 
 
 class StateTracker:
