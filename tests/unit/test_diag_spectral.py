@@ -127,7 +127,10 @@ def test_a_change_from_normal_to_outer_race_is_dated():
     y = noise(6.0, seed=4) + burst_train(6.0, FS, F.bpfo * SLIP, amplitude=3.0, start=3.0, jitter=0.01)
     segs, dec = diagnose(y)
     assert [s.state for s in segs] == [N, O]
-    assert 2.6 <= segs[1].start <= 3.4  # within a window of the change
+    # the long horizon's change-point estimate (the run of recent windows holding the strongest
+    # evidence) resolves the onset to about two windows: in the exponential tail a window of
+    # noise added to the fault's barely weakens the evidence
+    assert 3.0 - 2 * 0.34 <= segs[1].start <= 3.4
     assert 3.0 < segs[1].detected_at <= 3.0 + 3 * 0.34
 
 

@@ -51,7 +51,7 @@ rates = st.one_of(st.sampled_from([0.0, -12000.0, math.nan, math.inf, 1e-9, 1e12
 
 def new_session():
     logged = []
-    values = {p.name: p.default for p in PARAMETERS} | {"rpm": 1797.0}
+    values = {p.name: p.default for p in PARAMETERS} | {"rpm": 1797.0, "rpm_tolerance": 0.02}
     return DiagnoserSession(values, lambda level, text: logged.append((level, text))), logged
 
 

@@ -19,7 +19,7 @@ that was right in each bin) complete it. Every record runs with the same setting
 from __future__ import annotations
 
 from collections import defaultdict
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -56,8 +56,8 @@ class LabelledRecording:
     def load(self) -> Recording:
         rec = load_recording(self.path, sample_rate=self.sample_rate, rpm=self.rpm, channel=self.channel)
         if self.resample_to:
-            rec = Recording(resample(rec.accel, rec.sample_rate, self.resample_to), self.resample_to, rec.rpm,
-                            rec.source, None, rec.channel, rec.path)
+            rec = replace(rec, accel=resample(rec.accel, rec.sample_rate, self.resample_to),
+                          sample_rate=self.resample_to, truth=None)
         return rec
 
 
@@ -125,7 +125,7 @@ def evaluate(record: LabelledRecording, method: str = "model", speed_told: bool 
         cover[s.state] += s.end - s.start
         conf[s.state] += (s.end - s.start) * s.confidence
     state = max(cover, key=cover.get) if cover else None
-    windows = [(d.state, d.confidence) for d in res.decisions if not d.sensor_problem]
+    windows = [(d.state, d.confidence) for d in res.decisions if d.diagnosed]
     first = next((s.detected_at for s in res.segments if s.state == state), None)
     return RecordResult(record, method, state, cover[state] / duration if state is not None else 0.0,
                         conf[state] / cover[state] if state is not None and cover[state] > 0 else 0.0, first,
@@ -153,9 +153,11 @@ def totals(results: list[RecordResult]) -> dict:
 
 def calibration(results: list[RecordResult], faults: bool) -> list[tuple[float, float, int, float]]:
     """(bin low, bin high, windows, share right) of the published confidence over all windows
-    whose published state is a fault (``faults``) or NORMAL."""
+    whose published state names a part (``faults``: OUTER_RACE, INNER_RACE, BALL) or is NORMAL
+    (UNKNOWN's confidence is that something is wrong, not that a part is)."""
+    parts = (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL)
     pairs = [(c, s == r.record.truth) for r in results for s, c in r.window_states
-             if (s != FaultState.NORMAL) == faults]
+             if (s in parts if faults else s == FaultState.NORMAL)]
     conf = np.array([c for c, _ in pairs])
     right = np.array([ok for _, ok in pairs])
     rows = []

@@ -156,14 +156,15 @@ class Diagnoser:
         return self._decide(self._front.flush(self._streams, self.expected))
 
     def _decide(self, verdicts: list[WindowVerdict]) -> list[Decision]:
-        """Window verdicts through the hysteresis; a window not diagnosed (sensor problem) leaves
-        the state as it is."""
+        """Window verdicts through the hysteresis; a window not diagnosed (a sensor or speed problem)
+        leaves the state as it is."""
         tr = self._tracker
         out = []
         for v in verdicts:
-            changed = False if v.sensor_problem else tr.update(v.label, v.confidence, v.start, v.end, v.posterior)
+            diagnosed = not (v.sensor_problem or v.speed_problem)
+            changed = diagnosed and tr.update(v.label, v.confidence, v.start, v.end, v.posterior, v.evidence_since)
             out.append(Decision(v.end, v.start, v.end, v.label, tr.state, tr.confidence, tr.onset, changed, v.scores,
-                                v.detail, v.sensor_problem))
+                                v.detail, v.sensor_problem, v.speed_problem))
         if self.keep_history:
             self.history.extend(out)
         return out

@@ -124,6 +124,7 @@ class DiagnoserSession:
         self.shaft_rpm: float | None = None
         self.last_report: StateReport | None = None
         self.sensor_problem = ""
+        self.speed_problem = ""
         self.decision_problem = ""  # why the last chunk could not be decided on (cleared by a good one)
         self.last_refusal = ""  # why the last refused chunk was refused
         self.rejected_speeds = 0
@@ -264,8 +265,8 @@ class DiagnoserSession:
 
     def _account(self, d: Decision) -> bool:
         """Remember a window's sensor verdict; True when its state is to be published."""
-        self.sensor_problem = d.sensor_problem
-        return not self.sensor_problem
+        self.sensor_problem, self.speed_problem = d.sensor_problem, d.speed_problem
+        return d.diagnosed
 
     def _report(self, d: Decision) -> StateReport:
         report = StateReport(d.state, d.confidence, self.time_offset + d.time, self.time_offset + d.onset,
@@ -301,6 +302,8 @@ class DiagnoserSession:
         elif self.sensor_problem:
             level, message = max(level, LEVEL_WARN), f"sensor problem: {self.sensor_problem}"
             values["sensor"] = self.sensor_problem
+        elif self.speed_problem:
+            level, message = max(level, LEVEL_WARN), f"not diagnosed: {self.speed_problem}"
         elif self.speed_unknown:
             level, message = max(level, LEVEL_WARN), f"{message} ({SPEED_UNKNOWN})"
         if silent:

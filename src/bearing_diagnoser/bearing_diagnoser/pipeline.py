@@ -72,9 +72,11 @@ class MonitorPipeline:
     config : DiagnoserConfig
         The decision's configuration, as it is.
     rpm : float or None
-        The recording's shaft speed (rev/min), a measured one (as a tachometer's
-        ``shaft_speed``); None: the decision estimates it, the observers assume
-        :data:`NOMINAL_RPM`.
+        The recording's shaft speed (rev/min): a label (the ``rpm`` parameter, within
+        ``rpm_tolerance``), refined from the vibration; None: the decision estimates it, the
+        observers assume :data:`NOMINAL_RPM`.
+    rpm_tolerance : float
+        Relative tolerance of ``rpm`` (default: the diagnoser node's, a nameplate's).
     observed : bool
         Run the observers; else the measurement is a model-free stream.
     streams : tuple of FaultState
@@ -84,17 +86,19 @@ class MonitorPipeline:
     """
 
     def __init__(self, bearing: Bearing, model_set: str, config: DiagnoserConfig, rpm: float | None = None,
-                 observed: bool = True, streams: tuple = STREAMS, keep_streams: bool = False):
+                 observed: bool = True, streams: tuple = STREAMS, keep_streams: bool = False,
+                 rpm_tolerance: float | None = None):
         self.model_set = model_set
         self.streams = streams
         nominal = rpm or NOMINAL_RPM
         self.observers = {h: ObserverSession(h, bearing, model_set, nominal, log=_log) for h in streams} \
             if observed else {}
         self.fault_hz = {h: fault_frequency(bearing, h, nominal) for h in streams}
-        values = {p.name: p.default for p in PARAMETERS} | {"model_set": model_set, "bearing": bearing_spec(bearing)}
+        values = {p.name: p.default for p in PARAMETERS} | {"model_set": model_set, "bearing": bearing_spec(bearing),
+                                                             "rpm": float(rpm or 0.0)}
+        if rpm_tolerance is not None:
+            values["rpm_tolerance"] = float(rpm_tolerance)
         self.diagnoser = DiagnoserSession(values, _log, bearing=bearing, config=config, keep_history=True)
-        if rpm:
-            self.diagnoser.measured_speed(rpm)
         self.kept = {h: {"residual": [], "estimate": [], "impulse_train": []} for h in self.observers} \
             if keep_streams else {}
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bearing_common.bearings import CATALOG, DEFAULT_BEARING, Bearing
-from bearing_recordings.recording import InputError, Recording
+from bearing_recordings.recording import MEASURED_RPM_TOLERANCE, InputError, Recording
 from bearing_recordings.resampling import resample
 
 from .decision.config import DiagnoserConfig
@@ -52,7 +52,7 @@ class OfflineResult:
     streams: dict = field(default_factory=dict)  # hypothesis label -> dict of arrays (for plots)
     cpu_s: float = 0.0
     method: str = "model"
-    sensor_problems: list = field(default_factory=list)  # (start s, end s, problem)
+    not_diagnosed: list = field(default_factory=list)  # (start s, end s, why: a sensor or speed problem)
 
 
 def _speed(rec: Recording, rpm: float | None) -> float | None:
@@ -99,7 +99,7 @@ def run_pipeline(pipeline: MonitorPipeline, x: np.ndarray, fs: float, source: st
 def diagnose_recording(rec: Recording, model_set: str | None = None, method: str = "model",
                        rpm: float | None = None, bearing: Bearing | None = None,
                        config: DiagnoserConfig | None = None, keep_streams: bool = False,
-                       chunk_s: float = CHUNK_S) -> OfflineResult:
+                       chunk_s: float = CHUNK_S, rpm_tolerance: float | None = None) -> OfflineResult:
     """Diagnose a whole recording offline, exactly as the live graph would.
 
     Parameters
@@ -112,6 +112,9 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         The decision with the observers (default), or the textbook envelope reference.
     rpm : float, optional
         Shaft speed (rev/min); default the recording's, else estimated from the vibration.
+    rpm_tolerance : float, optional
+        Relative accuracy of the speed: default the recording's own statement for its speed
+        (a rig's measurement), else the diagnoser's default for a told speed (a nameplate's).
     bearing : Bearing, optional
         The monitored bearing (default: the recording's, else the 6205).
     config : DiagnoserConfig, optional
@@ -138,12 +141,16 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         raise InputError(str(exc)) from None
     x, truth = _at_rate(rec, fs, ms)
     observed = method == "model"
+    if rpm_tolerance is None and (rpm is None or rpm == rec.rpm):
+        rpm_tolerance = rec.rpm_tolerance
     pipeline = MonitorPipeline(bearing, ms, cfg, speed, observed,
-                               STREAMS if observed or cfg.front_end.EVERY_STREAM else STREAMS[:1], keep_streams)
+                               STREAMS if observed or cfg.front_end.EVERY_STREAM else STREAMS[:1], keep_streams,
+                               rpm_tolerance)
     t_cpu = time.process_time()
     decisions = run_pipeline(pipeline, x, fs, rec.source, chunk_s)
     cpu = time.process_time() - t_cpu
-    problems = [(d.window_start, d.window_end, d.sensor_problem) for d in decisions if d.sensor_problem]
+    problems = [(d.window_start, d.window_end, d.sensor_problem or d.speed_problem) for d in decisions
+                if not d.diagnosed]
     segs = segments_from_decisions(decisions, x.size / fs, ms)
     if decisions and not segs:
         raise InputError(f"no window could be diagnosed: {problems[0][2]}")
@@ -152,11 +159,13 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
 
 def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",
                          config: DiagnoserConfig | None = None, bearing: Bearing | None = None,
-                         chunk_s: float = CHUNK_S) -> tuple[list[Segment], list[Decision]]:
+                         chunk_s: float = CHUNK_S,
+                         rpm_tolerance: float = MEASURED_RPM_TOLERANCE) -> tuple[list[Segment], list[Decision]]:
     """The decision with the defaults of ``model_set`` on a measurement alone (no observer: y fed
     as both streams' residual, ŷ = 0): the "observer without train, L = 0" front end of
-    diagnosis-notes.md, for testing the decision core and for data without a model set."""
+    diagnosis-notes.md, for testing the decision core and for data without a model set. ``rpm``
+    is known to ``rpm_tolerance`` (default: a measured speed's)."""
     pipeline = MonitorPipeline(bearing or CATALOG[DEFAULT_BEARING], model_set, config or config_for(model_set), rpm,
-                               observed=False)
+                               observed=False, rpm_tolerance=rpm_tolerance)
     decisions = run_pipeline(pipeline, np.asarray(y, dtype=float), fs, "measurement", chunk_s)
     return segments_from_decisions(decisions, y.size / fs, model_set), decisions

@@ -30,7 +30,7 @@ from bearing_common.stamps import to_seconds
 from bearing_common.units import sample_rate_problem
 
 from .bag_types import CUSTOM_BEARING, CUSTOM_NAMESPACE, BagError, project_typestore
-from .recording import MAX_SAMPLES, Recording
+from .recording import MAX_SAMPLES, MEASURED_RPM_TOLERANCE, Recording
 
 LOG = logging.getLogger(__name__)
 
@@ -413,4 +413,4 @@ def load_bag(path, channel: str | None = None, namespace: str | None = None) -> 
     truth = truth_per_sample(contents.truth, stream.start_time, stream.samples.size, stream.sample_rate)
     return Recording(stream.samples, stream.sample_rate, contents.rpm, stream.source, truth,
                      channel or topics.VIBRATION.name, str(path), start_time=stream.start_time,
-                     bearing=bag_bearing(path))
+                     bearing=bag_bearing(path), rpm_tolerance=None if contents.rpm is None else MEASURED_RPM_TOLERANCE)

@@ -18,6 +18,10 @@ from bearing_common.units import sample_rate_problem
 MAX_SAMPLES = 360_000_000
 
 
+#: Relative accuracy of a shaft speed a rig measured and stored with its recording.
+MEASURED_RPM_TOLERANCE = 0.02
+
+
 class InputError(ValueError):
     """The input file or its options cannot be used (message is user-facing, one line)."""
 
@@ -50,6 +54,10 @@ class Recording:
     bearing : Bearing or None
         The bearing the recording monitors, when the file says (MFPT files, the CWRU
         channel's end, bags written by ``bearing-bag``), parsed by the loader; else None.
+    rpm_tolerance : float or None
+        Relative accuracy of ``rpm`` as the file states it: :data:`MEASURED_RPM_TOLERANCE` for a
+        speed the rig measured (CWRU's, MFPT's, a bag's ``shaft_speed``, the simulator's); None
+        for a speed from the user or a label (the decision then assumes a nameplate's).
     """
 
     accel: np.ndarray
@@ -62,6 +70,7 @@ class Recording:
     start_time: float = 0.0
     notes: list | None = None
     bearing: Bearing | None = None
+    rpm_tolerance: float | None = None
 
     @property
     def duration(self) -> float:

@@ -26,8 +26,10 @@ class WindowVerdict:
 
     ``posterior``: {state: probability} when the front end has one (the tracker then reports
     the mean posterior of the published state as its confidence); ``detail``: what was special
-    about the window (a missing stream); ``sensor_problem``: why the window was not diagnosed
-    at all ("" when it was).
+    about the window (a missing stream); ``sensor_problem``, ``speed_problem``: why the window
+    was not diagnosed at all (the sensor signal unusable; the shaft speed not known well enough
+    to tell the parts apart; "" when it was); ``evidence_since``: when the evidence for the label began (s), when
+    the front end knows it better than the window (accumulated evidence).
     """
 
     start: float
@@ -38,6 +40,8 @@ class WindowVerdict:
     posterior: dict | None = None
     detail: str = ""
     sensor_problem: str = ""
+    speed_problem: str = ""
+    evidence_since: float | None = None
 
 
 class FrontEnd(Protocol):

@@ -35,13 +35,13 @@ class Segment:
 def segments_from_decisions(decisions: list[Decision], duration: float, model_set: str) -> list[Segment]:
     """Maximal runs of the published state; start = estimated onset, end = next onset.
 
-    Windows with a sensor problem are not diagnosed and take no part. A segment's scores are
+    Windows not diagnosed (a sensor or speed problem) take no part. A segment's scores are
     the medians over its windows of the names its front end summarises
     (:attr:`.scores.WindowScores.SUMMARY_KEYS`).
     """
     segs: list[Segment] = []
     members: list[list[Decision]] = []
-    for d in (d for d in decisions if not d.sensor_problem):
+    for d in (d for d in decisions if d.diagnosed):
         if not segs:
             segs.append(Segment(0.0, duration, d.state, 0.0, d.time, {}, model_set))
             members.append([])

@@ -73,6 +73,18 @@ def _band_power(cumulative: np.ndarray, df: float, bands: np.ndarray) -> np.ndar
     return (cumulative[i1] - cumulative[i0]) / np.maximum(i1 - i0, 1)
 
 
+def live_bands(raw: np.ndarray, n: int, fs: float, f_top: float, f_usable: float) -> list[np.ndarray]:
+    """The admissible candidates (:func:`candidate_bands`) that hold band power, from ``raw``, the rfft of
+    ``n`` samples: at least 1e-6 × the median candidate's (module docstring)."""
+    groups = candidate_bands(fs, f_top, f_usable)
+    if not groups:
+        return []
+    cumulative = np.concatenate([[0.0], np.cumsum(np.abs(raw) ** 2)])
+    power = [_band_power(cumulative, fs / n, g) for g in groups]
+    floor = 1e-6 * float(np.median(np.concatenate(power)))
+    return [g[p > floor] for g, p in zip(groups, power) if np.any(p > floor)]
+
+
 def choose_band(x: np.ndarray, fs: float, f_top: float, f_usable: float, fr: float, terms: dict,
                 rho: tuple[float, float], prewhiten: bool = True, mask_shaft: bool = True,
                 criterion: str = "evidence") -> BandChoice | None:
@@ -82,15 +94,8 @@ def choose_band(x: np.ndarray, fs: float, f_top: float, f_usable: float, fr: flo
     ``criterion="kurtogram"``: the most impulsive band instead (Antoni's kurtogram, the
     textbook choice; the window tests then pay no factor for it).
     """
-    groups = candidate_bands(fs, f_top, f_usable)
-    if not groups:
-        return None
     raw = np.fft.rfft(x - x.mean())
-    cumulative = np.concatenate([[0.0], np.cumsum(np.abs(raw) ** 2)])
-    power = [_band_power(cumulative, fs / x.size, g) for g in groups]
-    floor = 1e-6 * float(np.median(np.concatenate(power)))
-    groups = [g[p > floor] for g, p in zip(groups, power)]
-    groups = [g for g in groups if len(g)]
+    groups = live_bands(raw, x.size, fs, f_top, f_usable)
     n_candidates = sum(len(g) for g in groups)
     if not n_candidates:
         return None

@@ -31,14 +31,22 @@ class SpectralSettings:
     buffer_s, reselect_s : float
         Seconds of recent data the speed and band are estimated on, and how often (s).
     told_tolerance : float
-        Relative half-range within which a told speed is refined (a tachometer or the file:
-        2 %; a nameplate speed: say 10 %).
+        Relative half-range within which a told speed is refined when the teller states none
+        (a tachometer: 2 %; the nameplate of a drive-fed motor, a recording's label: 10 %).
     blind_range_hz : (float, float)
         Shaft rates (Hz) searched when no speed is told.
     window_s : float
         Analysis window (s); 0: derived, 4 cage periods (:mod:`.front_end`).
     band_criterion : ``"evidence"`` or ``"kurtogram"``
         How the demodulation band is chosen (:mod:`.band_choice`).
+    accumulate, max_windows : bool, int
+        Run the long horizon (:mod:`.accumulation`), over at most this many non-overlapping windows.
+    speed_lines : int
+        Shaft harmonics (1x included) a measured speed must rest on.
+    false_alarm_rate : float
+        False alarms per hour of healthy operation (Gaussian noise) that the tests may give
+        together, every window's short-horizon test and every long-horizon evaluation counted
+        (a union bound: :mod:`.front_end`).
     """
 
     prewhiten: bool = True
@@ -53,6 +61,10 @@ class SpectralSettings:
     blind_range_hz: tuple[float, float] = (5.0, 60.0)
     window_s: float = 0.0
     band_criterion: str = "evidence"
+    accumulate: bool = True
+    max_windows: int = 32
+    speed_lines: int = 3
+    false_alarm_rate: float = 1e-3
 
     NAME = "spectral"
     NEEDS_SPEED = True  # estimated blind, the speed misses most faults (bearing-accuracy ablation)

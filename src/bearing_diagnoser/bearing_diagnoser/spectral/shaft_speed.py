@@ -3,12 +3,15 @@
 On a buffer (Hann, one rfft) the power spectrum is normalised like the envelope spectrum
 (ln 2 · P / running median, ≈ Exp(1) per bin over a smooth background) and a bin is a
 *line* when it exceeds ln(N_bins / 0.01) (a 1 % chance that noise puts one line anywhere in
-the spectrum). For each candidate shaft rate on a grid (step df/(2K)) the harmonics
-k = 1..K (K = 10) that hit a line (±1 bin) are counted and scored by Σ_k max(0, ln z_k).
-A candidate must have its own 1× line and lines at ≥ half of its first K harmonics; among
-those the largest score wins. The rate is then the least-squares slope through the origin
-of the interpolated line peaks, f̂ = Σ k·f_k / Σ k², with the residual scatter (floored at
-the bin quantisation) as its standard uncertainty.
+the spectrum). The shaft's 1× line is the strongest line of the searched range that carries
+a harmonic series (it stands above its own sidebands and the neighbouring lines; the
+strongest five are tried in turn). Its harmonics k = 2..K (K = 10) are
+then taken in turn, each only where a line peaks within max(¾ bin, 3·k·σ) of k times the
+rate fitted so far (a line of another family is not a harmonic however many there are),
+and the rate is refitted after each: the least-squares slope through the origin of the
+interpolated line peaks, f̂ = Σ k·f_k / Σ k², with the residual scatter (floored at the bin
+quantisation) as its standard uncertainty σ. An estimate rests on at least ``min_lines``
+lines, the 1× included, and on lines at half of the harmonics the buffer holds.
 
 Use it to refine a speed that is told (a tachometer, the file, a nameplate) inside its
 tolerance. Without any prior it is not reliable: measured on the development recordings,
@@ -27,6 +30,9 @@ from .envelope_spectrum import hanning, normalise
 
 #: Harmonics of the shaft rate examined.
 N_HARMONICS = 10
+
+#: Lines of the searched range tried as the 1× line, strongest first.
+N_CANDIDATES = 5
 
 #: Chance that noise alone puts one line anywhere in the spectrum.
 LINE_FALSE_ALARM = 0.01
@@ -51,45 +57,48 @@ def estimate_speed(x: np.ndarray, fs: float, f_lo: float, f_hi: float, min_lines
         return None
     z = normalise(power[:nb])[0]
     line = z > np.log(nb / LINE_FALSE_ALARM)
-    near_line = line.copy()
-    near_line[1:] |= line[:-1]
-    near_line[:-1] |= line[1:]
-    grid = np.arange(f_lo, f_hi, df / (2 * N_HARMONICS))
-    k = np.arange(1, N_HARMONICS + 1)
-    idx = np.rint(grid[:, None] * k[None, :] / df).astype(int)
-    valid = (idx < nb - 1) & (idx > 2)
-    hits = np.where(valid, near_line[np.clip(idx, 0, nb - 1)], False)
-    count = hits.sum(axis=1)
-    if not count.size or count.max() < min_lines:
-        return None
-    z_near = z.copy()
-    z_near[1:] = np.maximum(z_near[1:], z[:-1])
-    z_near[:-1] = np.maximum(z_near[:-1], z[1:])
-    score = np.where(valid, np.log(np.maximum(z_near[np.clip(idx, 0, nb - 1)], 1.0)), 0.0).sum(axis=1)
-    shaft_like = hits[:, 0] & (count >= np.maximum(min_lines, 0.5 * valid.sum(axis=1)))
-    candidates = shaft_like if shaft_like.any() else count == count.max()
-    f0 = grid[int(np.argmax(np.where(candidates, score, -np.inf)))]
+    i_lo, i_hi = max(3, int(np.ceil(f_lo / df))), min(nb - 2, int(np.floor(f_hi / df)) + 1)
+    if i_hi <= i_lo or not line[i_lo:i_hi].any():
+        return None  # no 1x line in the range
     log_power = np.log(np.maximum(power[:nb], 1e-300))
-    orders, peaks = [], []
-    for kk in k:
-        b = int(np.rint(kk * f0 / df))
-        if b < 3 or b >= nb - 2:
-            continue
-        j = b - 1 + int(np.argmax(z[b - 1:b + 2]))
-        if not line[j]:
-            continue
+
+    def peak(j: int) -> float:
+        """Interpolated frequency (Hz) of the line peaking at bin j (parabola through log power)."""
         a, c, e = log_power[j - 1], log_power[j], log_power[j + 1]
         curvature = a - 2 * c + e
-        offset = 0.5 * (a - e) / curvature if curvature < 0 else 0.0
-        orders.append(kk)
-        peaks.append((j + np.clip(offset, -0.5, 0.5)) * df)
-    orders, peaks = np.asarray(orders, float), np.asarray(peaks)
-    if orders.size < min_lines:
+        return (j + float(np.clip(0.5 * (a - e) / curvature if curvature < 0 else 0.0, -0.5, 0.5))) * df
+
+    strongest = i_lo + np.argsort(z[i_lo:i_hi])[::-1]
+    for j in strongest[line[strongest]][:N_CANDIDATES]:  # the strongest line with a harmonic series
+        found = _harmonic_series(peak(int(j)), z, line, peak, df, nb, min_lines)
+        if found is not None and f_lo <= found.hz <= f_hi:
+            return found
+    return None
+
+
+def _harmonic_series(f1: float, z: np.ndarray, line: np.ndarray, peak, df: float, nb: int,
+                     min_lines: int) -> SpeedEstimate | None:
+    """The shaft rate whose 1× line peaks at ``f1`` Hz, fitted over its harmonics (module docstring);
+    None without ``min_lines`` lines and lines at half of the harmonics the spectrum holds."""
+    orders, peaks = [1.0], [f1]
+    hz, sigma = f1, df / np.sqrt(12.0)
+    usable = 1
+    for kk in range(2, N_HARMONICS + 1):
+        b = int(np.rint(kk * hz / df))
+        if b < 3 or b >= nb - 2:
+            break
+        usable += 1
+        j = b - 1 + int(np.argmax(z[b - 1:b + 2]))
+        f = peak(j)
+        if not line[j] or abs(f - kk * hz) > max(0.75 * df, 3.0 * kk * sigma):
+            continue
+        orders.append(float(kk))
+        peaks.append(f)
+        o, p = np.asarray(orders), np.asarray(peaks)
+        s2 = float(np.sum(o ** 2))
+        hz = float(np.sum(o * p) / s2)
+        scatter = float(np.sqrt(np.sum((p - o * hz) ** 2) / (o.size - 1) / s2))
+        sigma = max(scatter, df / np.sqrt(12.0) / np.sqrt(s2))
+    if len(orders) < max(min_lines, 0.5 * usable):
         return None
-    s2 = float(np.sum(orders ** 2))
-    hz = float(np.sum(orders * peaks) / s2)
-    if not f_lo <= hz <= f_hi:  # the interpolated peaks moved the fit out of the searched range
-        return None
-    floor = df / np.sqrt(12.0) / np.sqrt(s2)
-    scatter = float(np.sqrt(np.sum((peaks - orders * hz) ** 2) / (orders.size - 1) / s2)) if orders.size > 1 else 0.0
-    return SpeedEstimate(hz, max(scatter, floor), int(orders.size))
+    return SpeedEstimate(hz, sigma, len(orders))
