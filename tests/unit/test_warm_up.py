@@ -21,8 +21,7 @@ from bearing_diagnoser.diagnoser import Diagnoser
 from bearing_diagnoser.warm_up import warm_up as warm_up_decision
 from bearing_diagnoser.front_ends import config_for
 from bearing_diagnoser.synthetic import burst_train, white_noise
-from bearing_observer.kernels import warm_up
-from bearing_observer.observer import FaultObserver
+from bearing_observer.observer import FaultObserver, warm_up
 
 def signatures():
     seen = {}

@@ -21,7 +21,7 @@ from bearing_common.stamps import to_seconds
 from bearing_common.states import parse_fault
 from bearing_msgs.msg import Residual, ShaftSpeed, VibrationChunk
 
-from .kernels import warm_up
+from .observer import warm_up
 from .observer_node_config import PARAMETERS, default_node_name
 from .observer_session import ObserverSession
 
