@@ -41,7 +41,7 @@ def test_every_fault_but_the_undiagnosable_ball_record_and_no_alarm(results):
         assert t["faults_right"] >= right, (dataset, t, markdown(results))
         assert t["healthy_clean"] == healthy and t["alarm_windows"] == 0, (dataset, t)
     for ball in (r for r in results if r.method == "model" and r.record.truth == FaultState.BALL):
-        assert ball.state not in (FaultState.OUTER_RACE, FaultState.INNER_RACE), ball.record.name  # never the wrong part
+        assert ball.state not in (FaultState.OUTER_RACE, FaultState.INNER_RACE), ball.record.name  # the wrong part
 
 
 def test_at_least_as_good_as_the_textbook_envelope_spectrum(results):

@@ -31,7 +31,7 @@ from bearing_fleet.fleet_table import FleetTable
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bearing_common.bearings import BearingError, load_bearing
+from bearing_common.bearings import CATALOG, BearingError, load_bearing
 from bearing_common.states import FaultState
 from bearing_diagnoser.diagnoser_node_config import PARAMETERS
 from bearing_diagnoser.diagnoser_session import DiagnoserSession
@@ -117,7 +117,7 @@ def test_shaft_speed_callback_takes_any_float(rad_s):
     session, _ = new_session()
     session.on_speed(rad_s)
     assert session.shaft_rpm is None or (math.isfinite(session.shaft_rpm) and session.shaft_rpm > 0)
-    observer = ObserverSession(O, "6205", rpm=1797.0)
+    observer = ObserverSession(O, CATALOG["6205"], rpm=1797.0)
     observer.on_speed(rad_s)
     assert math.isfinite(observer.rpm) and observer.rpm > 0
 
@@ -136,7 +136,7 @@ vibration_chunk = st.fixed_dictionaries({
 @given(st.lists(vibration_chunk, min_size=1, max_size=6), st.sampled_from([O, I]))
 def test_vibration_callback_survives_anything_and_keeps_serving(chunks, fault):
     logged = []
-    session = ObserverSession(fault, "6205", rpm=1797.0, log=lambda level, text: logged.append((level, text)))
+    session = ObserverSession(fault, CATALOG["6205"], rpm=1797.0, log=lambda level, text: logged.append((level, text)))
     rng = np.random.default_rng(0)
     for c in chunks:
         x, _, _ = _arrays(dict(c, ragged=False), rng)

@@ -37,7 +37,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy import signal
 
-from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.bearings import Bearing
 from bearing_common.states import FaultState, parse_fault
 
 from .hw_model import HWModel, ModelFit
@@ -251,7 +251,7 @@ class _Train:
         return impulse_train(n, self.sample_rate, self.frequency, phase, start_time, pulse_width=self.pulse_width)
 
 
-def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bearing | str, orders=None,
+def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bearing, orders=None,
                          n_breakpoints: int = N_BREAKPOINTS, n_average: int = N_AVERAGE_IR,
                          refine_frequency: bool = True, provenance: dict | None = None, mode: str = "thesis",
                          n_series: int = 8) -> IdentificationResult:
@@ -267,9 +267,8 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bear
         Shaft speed (rev/min).
     fault : FaultState or str
         ``outer_race`` or ``inner_race``.
-    bearing : Bearing or str
-        The machine's bearing (anything :func:`bearing_common.bearings.load_bearing` reads):
-        gives the kinematic fault frequency; recorded in the model's provenance.
+    bearing : Bearing
+        The machine's bearing: gives the kinematic fault frequency; recorded in the model's provenance.
     orders : (nb, nf, nk), optional
         Linear-block orders; default :data:`DEFAULT_ORDERS`.
     n_breakpoints : int
@@ -299,7 +298,6 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bear
     nb, nf, nk = orders or DEFAULT_ORDERS[state.label]
     fs = float(sample_rate)
     fr = rpm / 60.0
-    bearing = load_bearing(bearing)
     # steps 1-3 (module docstring): fault frequency, phase, periods, identification data
     f_kin = bearing.frequencies(rpm).of(state)
     freq, phase, per = _fault_periods(y, fs, f_kin, refine_frequency)

@@ -55,7 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.bearings import Bearing
 from bearing_common.states import parse_fault
 
 from .hw_model import HWModel, same_bearing
@@ -125,9 +125,8 @@ class FaultObserver:
         Shaft speed (rev/min); default the model's.
     sample_rate : float, optional
         Hz; must equal the model's.
-    bearing : Bearing or str, optional
-        The watched bearing (anything :func:`bearing_common.bearings.load_bearing` reads);
-        default the model's. Its fault order is :func:`fault_order`'s: another bearing
+    bearing : Bearing, optional
+        The watched bearing; default the model's. Its fault order is :func:`fault_order`'s: another bearing
         than the model's gives a :class:`BearingMismatchWarning` and runs on.
     poles : "model" | "contracted" | array_like
         Observer pole choice (module docstring). Default ``"model"`` (L = 0).
@@ -152,7 +151,7 @@ class FaultObserver:
     """
 
     def __init__(self, model: HWModel, rpm: float | None = None, sample_rate: float | None = None,
-                 bearing: Bearing | str | None = None, poles="model", contraction: float = 0.95, window: float = 0.1,
+                 bearing: Bearing | None = None, poles="model", contraction: float = 0.95, window: float = 0.1,
                  update_interval: float = 0.1, min_explained: float = 0.4,
                  drive: str = "adaptive", phase: float | None = None, gains=None):
         if sample_rate is not None and not math.isclose(sample_rate, model.sample_rate, rel_tol=1e-9):
@@ -161,7 +160,7 @@ class FaultObserver:
         if drive not in ("adaptive", "phase", "off", "fixed"):
             raise ValueError("drive must be 'adaptive', 'phase', 'off' or 'fixed'")
         self.model = model
-        self.bearing = model.bearing if bearing is None else load_bearing(bearing)
+        self.bearing = model.bearing if bearing is None else bearing
         self.fault_order, mismatch = fault_order(model, None if bearing is None else self.bearing)
         if mismatch:
             warnings.warn(mismatch, BearingMismatchWarning, stacklevel=2)
@@ -199,7 +198,7 @@ class FaultObserver:
     # ------------------------------------------------------------------------------------
     @classmethod
     def from_model_set(cls, set_name: str, fault_type: str, rpm: float | None = None,
-                       sample_rate: float | None = None, bearing: Bearing | str | None = None,
+                       sample_rate: float | None = None, bearing: Bearing | None = None,
                        root=None, **kwargs) -> FaultObserver:
         """Observer for ``fault_type`` from the model set ``set_name`` (:mod:`.model_sets`).
 
