@@ -1,7 +1,7 @@
 """`make bench` rows of a fleet: how many motors one machine monitors in real time.
 
 A trial runs the monitoring graph of N motors (observers, diagnosers and the fleet node,
-laid out as in a fleet file: :mod:`bearing_bringup.fleet`) and feeds it from ONE
+laid out as in a fleet file: :mod:`bearing_bringup.fleet_plan`) and feeds it from ONE
 ``bearing-bag play`` of a bag holding every motor's ``<motor>/vibration/drive_end`` and
 ``<motor>/shaft_speed``, made beforehand from simulator output (normal, outer-race and
 inner-race signals with sensor noise, 4.5e-3 (m/s²)/√Hz, assigned to the motors in turn).
@@ -57,7 +57,7 @@ import yaml
 if __package__ in (None, ""):  # run as a script: `benchmarks` as a package
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-from bearing_bringup.fleet import MOTORS_PER_PROCESS  # noqa: E402 (after the path set-up of a script run)
+from bearing_bringup.fleet_plan import MOTORS_PER_PROCESS  # noqa: E402 (after the path set-up of a script run)
 
 SIGNAL_S = 15.0  #: s of signal per motor and trial
 RATES = (12000.0, 48000.0)  #: Hz
@@ -329,7 +329,7 @@ def snapshot(pids: dict, fn) -> dict:
 def run_trial(n: int, rate: float, layout: str = "role", motors_per_process: int = MOTORS_PER_PROCESS,
               seconds: float = SIGNAL_S) -> Trial:
     """Run N motors at ``rate`` Hz fed by one bag player; see the module docstring."""
-    from bearing_bringup.fleet import load_fleet, parameters_file, processes
+    from bearing_bringup.fleet_plan import load_fleet, parameters_file, processes
     from bearing_bringup.graph_cli import process_argv
     from bearing_bringup.process_group import ProcessGroup
 
@@ -453,7 +453,7 @@ LAYOUT_MOTORS = 8  #: motors of the layout comparison (48 kHz)
 
 def bench_fleet_layouts() -> list:
     """The same fleet (8 motors at 48 kHz) in each process layout."""
-    from bearing_bringup.fleet import LAYOUTS
+    from bearing_bringup.fleet_plan import LAYOUTS
     trials = []
     for layout in LAYOUTS:
         trials.append(run_trial(LAYOUT_MOTORS, 48000.0, layout))

@@ -1,10 +1,10 @@
-"""Fleet files and the processes they give (bearing_bringup.fleet, no ROS graph)."""
+"""Fleet files and the processes they give (bearing_bringup.fleet_plan, no ROS graph)."""
 
 import pytest
 import yaml
 
 from bearing_bringup import nodes_main
-from bearing_bringup.fleet import FleetError, default_fleet_file, load_fleet, parameters_file, processes
+from bearing_bringup.fleet_plan import FleetError, default_fleet_file, load_fleet, parameters_file, processes
 from bearing_bringup.graph import GRAPH, config_path, single_graph
 from bearing_common import topics
 
