@@ -67,9 +67,10 @@ DDS_VARIABLES = ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_STATIC_P
 #: probe_b the fault states next to the diagnoser.
 ONE_HOST = {"simulator": "A", "or_observer": "A", "ir_observer": "A", "diagnoser": "A", "probe_a": "A", "probe_b": "A"}
 SPLITS = {
-    # the residuals cross the link (3 float64 arrays per sample and hypothesis; at least the residuals themselves)
+    # the residuals cross the link (float32 residual, estimate and train per sample and hypothesis with the
+    # simulator's model set; at least the residuals themselves)
     "observers-on-A": ({"simulator": "A", "or_observer": "A", "ir_observer": "A", "diagnoser": "B",
-                        "probe_a": "A", "probe_b": "B"}, 2 * 8),
+                        "probe_a": "A", "probe_b": "B"}, 2 * 4),
     # an edge sensor: only the vibration (one float64 per sample) and the shaft speed cross the link
     "sensor-on-A": ({"simulator": "A", "or_observer": "B", "ir_observer": "B", "diagnoser": "B",
                      "probe_a": "A", "probe_b": "B"}, 8),
