@@ -187,12 +187,13 @@ class DiagnoserSession:
 
     def on_residual(self, hypothesis: FaultState, stamp: float, first_index: int, sample_rate: float,
                     residual, estimate, train, fault_hz: float, model_set: str, now: float) -> list[StateReport]:
-        """One residual chunk (arrays of equal length); returns the fault states to publish."""
+        """One residual chunk (arrays of equal length; estimate, train None = absent); returns the fault
+        states to publish."""
         self.last_heard[hypothesis] = now
         r = np.asarray(residual, dtype=float)
         stream = self.streams[hypothesis]
         verdict = stream.check(stamp, first_index, sample_rate, r)
-        if verdict.accepted and not (len(estimate) == len(train) == r.size):
+        if verdict.accepted and any(a is not None and len(a) != r.size for a in (estimate, train)):
             stream.counts["rejected"] += 1
             self._log_repeatable("rejected", "warning", f"rejected residual chunk: {stream.name}: array lengths differ")
             return []
@@ -210,8 +211,9 @@ class DiagnoserSession:
         self._fed.add(hypothesis)
         self.deployed.add(hypothesis)
         try:
-            decisions = self.core.update(hypothesis, first_index, sample_rate, r, np.asarray(estimate, float),
-                                         np.asarray(train, float), fault_hz)
+            decisions = self.core.update(hypothesis, first_index, sample_rate, r,
+                                         None if estimate is None else np.asarray(estimate, float),
+                                         None if train is None else np.asarray(train, float), fault_hz)
         except ValueError as exc:
             stream.counts["rejected by decision"] += 1
             self.decision_problem = str(exc)
