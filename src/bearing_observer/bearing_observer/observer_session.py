@@ -140,8 +140,9 @@ class ObserverSession:
             return None
         if verdict.resync:
             self.observer.reset()
-            if verdict.reason:
-                self.log("info", verdict.reason)
+            if verdict.reason:  # throttled: an overloaded host drops chunks, and a log line per gap
+                # (1-4 ms in rclpy) made it fall further behind
+                self._log_repeatable("resync", "info", verdict.reason)
         name, frequency = self._built_for[0], float(self.observer.fault_frequency)
         if name == NONE:
             return ResidualChunk(samples, None, None, name, frequency)
