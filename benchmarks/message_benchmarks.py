@@ -95,3 +95,49 @@ def bench_residual_cpu() -> list:
     return [(f"residual message of {sizes[layout] / 1e3:.0f} kB (48 kHz, 0.1 s chunk; {layout}): CPU of publisher + "
              "subscriber per message, 10 Hz (/ the smallest, same run)", f"{cpu[layout]:.0f} ({cpu[layout] / low:.2f})",
              "µs (ratio)") for layout in LAYOUTS]
+
+
+def observer_callback_us(rate: float, chunk: float, repeat: int = 300) -> dict:
+    """µs per chunk of the observer's own work (model set none): ``before`` = the observer run
+    for a train nobody read and three ``.tolist()`` arrays, ``now`` = the session's pass-through
+    and one float32 array from bytes."""
+    import timeit
+
+    from bearing_common.states import FaultState
+    from bearing_msgs.msg import Residual
+    from bearing_observer.node import float32_array
+    from bearing_observer.observer import FaultObserver
+    from bearing_observer.observer_session import ObserverSession
+
+    n = int(round(rate * chunk))
+    y = np.random.default_rng(0).normal(size=50 * n)
+    observer = FaultObserver.from_model_set("none", "outer_race", 1800.0, rate)
+    session = ObserverSession(FaultState.OUTER_RACE, "6205", "", 1800.0)
+    calls = {"before": 0, "now": 0}
+
+    def before():
+        i = calls["before"] % 50
+        calls["before"] += 1
+        out = observer.process(y[i * n:(i + 1) * n])
+        msg = Residual()
+        msg.residual, msg.estimate = out.residual.tolist(), out.estimate.tolist()
+        msg.impulse_train = out.impulse_train.tolist()
+
+    def now():
+        i = calls["now"]
+        calls["now"] += 1
+        out = session.on_chunk(i * n / rate, i * n, rate, "accelerometer", y[(i % 50) * n:(i % 50 + 1) * n])
+        Residual().residual = float32_array(out.residual)
+
+    return {name: timeit.timeit(fn, number=repeat) / repeat * 1e6 for name, fn in (("before", before), ("now", now))}
+
+
+def bench_observer_callback() -> list:
+    """The observer's own work per chunk with model set none, before and now, in the same run."""
+    rows = []
+    for rate, chunk in ((48000.0, 0.01), (48000.0, 0.1), (12000.0, 0.1)):
+        t = observer_callback_us(rate, chunk)
+        rows.append((f"observer callback work per chunk, model set none, {rate / 1000:g} kHz, {chunk:g} s chunks: "
+                     "before / now (now / before, same run)",
+                     f"{t['before']:.0f} / {t['now']:.0f} ({t['now'] / t['before']:.2f})", "µs (ratio)"))
+    return rows
