@@ -23,8 +23,9 @@ POLL_S = 0.005
 
 def main(argv=None) -> int:
     import rclpy
-    from rclpy.qos import QoSProfile
     from std_msgs.msg import Empty
+
+    from bearing_common import topics
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--first", type=int, required=True)
@@ -37,8 +38,9 @@ def main(argv=None) -> int:
         context = rclpy.Context()
         rclpy.init(context=context)
         node = rclpy.create_node(f"participant_{i}", context=context, start_parameter_services=False)
-        pub = node.create_publisher(Empty, f"chain_{i}", QoSProfile(depth=1))
-        sub = node.create_subscription(Empty, f"chain_{(i - 1) % args.total}", lambda msg: None, QoSProfile(depth=1))
+        mine, previous = (topics.Topic(f"chain_{k}", "std_msgs/msg/Empty", 1) for k in (i, (i - 1) % args.total))
+        pub = node.create_publisher(Empty, mine.name, topics.qos(mine))
+        sub = node.create_subscription(Empty, previous.name, lambda msg: None, topics.qos(previous))
         parts.append({"i": i, "context": context, "node": node, "pub": pub, "sub": sub, "created": time.monotonic()})
     pending = list(parts)
     while pending:
