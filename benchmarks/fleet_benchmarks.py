@@ -221,12 +221,13 @@ def make_bag(out: pathlib.Path, n: int, rate: float, chunk: float, seconds: floa
 def decision_hop(rate: float, source: str = SOURCE) -> int:
     """Samples between two decisions of one motor, measured on the decision itself fed 3 s of the
     normal signal (the relay diagnosers publish at that pace)."""
+    from bearing_common.bearings import CATALOG
     from bearing_common.states import FaultState
-    from bearing_diagnoser.decision import Diagnoser
-    from bearing_diagnoser.decision_config import config_for
+    from bearing_diagnoser.diagnoser import Diagnoser
+    from bearing_diagnoser.front_ends import config_for
     from bearing_observer.model_sets import choose_model_set
-    name = choose_model_set(source, rate, "6205").name
-    core = Diagnoser(config_for(name), name, "6205", rate)
+    name = choose_model_set(source, rate, CATALOG["6205"]).name
+    core = Diagnoser(config_for(name), name, CATALOG["6205"], rate)
     core.tell_speed(RPM)
     x = signals(rate)["normal"][: int(3.0 * rate)]
     ends = [d.window_end for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE)
@@ -304,7 +305,7 @@ class Listener:
 
         from bearing_common import topics
         from bearing_common.node_main import event_executor
-        from bearing_diagnoser.session import status_name
+        from bearing_diagnoser.diagnoser_session import status_name
 
         self.motors, self.chunk, self.graph = motors, chunk, graph
         self.offsets = dict(zip(motors, offsets))

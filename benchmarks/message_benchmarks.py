@@ -103,6 +103,7 @@ def observer_callback_us(rate: float, chunk: float, repeat: int = 300) -> dict:
     and one float32 array from bytes."""
     import timeit
 
+    from bearing_common.bearings import CATALOG
     from bearing_common.states import FaultState
     from bearing_msgs.msg import Residual
     from bearing_observer.node import float32_array
@@ -112,7 +113,7 @@ def observer_callback_us(rate: float, chunk: float, repeat: int = 300) -> dict:
     n = int(round(rate * chunk))
     y = np.random.default_rng(0).normal(size=50 * n)
     observer = FaultObserver.from_model_set("none", "outer_race", 1800.0, rate)
-    session = ObserverSession(FaultState.OUTER_RACE, "6205", "", 1800.0)
+    session = ObserverSession(FaultState.OUTER_RACE, CATALOG["6205"], "", 1800.0)
     calls = {"before": 0, "now": 0}
 
     def before():

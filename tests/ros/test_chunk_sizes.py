@@ -11,9 +11,10 @@ from graph_helpers import wait_spec
 
 from bearing_bringup.graph import GRAPH, config_path
 from bearing_common import topics
+from bearing_common.bearings import CATALOG
 from bearing_common.states import FaultState
 from bearing_diagnoser.diagnoser_node_config import PARAMETERS
-from bearing_diagnoser.session import DiagnoserSession
+from bearing_diagnoser.diagnoser_session import DiagnoserSession
 from bearing_observer.observer_session import ObserverSession
 
 pytestmark = pytest.mark.ros
@@ -29,7 +30,8 @@ def seconds(stamp) -> float:
 
 def offline(y: np.ndarray, rate: float, source: str, diagnoser_values: dict) -> list:
     """(stamp, state, onset, confidence) the sessions publish for ``y`` in 0.01 s chunks."""
-    observers = {h: ObserverSession(h, "6205", "", 1800.0) for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE)}
+    streams = (FaultState.OUTER_RACE, FaultState.INNER_RACE)
+    observers = {h: ObserverSession(h, CATALOG["6205"], "", 1800.0) for h in streams}
     diagnoser = DiagnoserSession({p.name: p.default for p in PARAMETERS} | diagnoser_values, lambda *a: None)
     n, out = int(round(OFFLINE_CHUNK_S * rate)), []
     for i in range(0, y.size, n):
