@@ -40,6 +40,11 @@ diagnosers (the same process layout, executor, topics, QoS, message types, sizes
 doing nothing else) at the same N, measured in the same run; the monitoring CPU per motor
 over the relay's is the ratio to the floor.
 
+``make bench`` (:func:`bench_fleet_chunks`) runs, per sample rate and chunk size and in turn in
+one run, :data:`CHUNK_MOTORS` motors monitored, the relays in their place, and one motor's
+decision alone in this process on the same signals and chunks (the work no message layout
+changes); motors per core there are 1 / the monitoring's CPU per motor.
+
 The machine is shared: other users' processes (invisible to ``ps`` here) take up to a core
 at times. Each trial waits for a quiet machine first and records the CPU others used while
 it ran (machine busy time from /proc/stat minus the trial's processes); a trial that fails
@@ -55,6 +60,7 @@ from __future__ import annotations
 
 import argparse
 import bisect
+import functools
 import itertools
 import math
 import os
@@ -218,21 +224,51 @@ def make_bag(out: pathlib.Path, n: int, rate: float, chunk: float, seconds: floa
     return len(range(0, int(seconds * rate), n_chunk))
 
 
-def decision_hop(rate: float, source: str = SOURCE) -> int:
-    """Samples between two decisions of one motor, measured on the decision itself fed 3 s of the
-    normal signal (the relay diagnosers publish at that pace)."""
-    from bearing_common.bearings import CATALOG
-    from bearing_common.states import FaultState
+def motor_decision(rate: float, source: str = SOURCE):
+    """One motor's decision as its diagnoser runs it (the model set the source gets, the bag's
+    shaft speed told), compiled kernels and tables loaded."""
+    from bearing_common.bearings import CATALOG, DEFAULT_BEARING
     from bearing_diagnoser.diagnoser import Diagnoser
     from bearing_diagnoser.front_ends import config_for
+    from bearing_diagnoser.warm_up import warm_up
     from bearing_observer.model_sets import choose_model_set
-    name = choose_model_set(source, rate, CATALOG["6205"]).name
-    core = Diagnoser(config_for(name), name, CATALOG["6205"], rate)
-    core.tell_speed(RPM)
-    x = signals(rate)["normal"][: int(3.0 * rate)]
-    ends = [d.window_end for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE)
-            for d in core.update(h, 0, rate, x, fault_frequency=100.0)]
-    return int(round(float(np.median(np.diff(sorted(set(ends))))) * rate))
+    warm_up()
+    bearing = CATALOG[DEFAULT_BEARING]
+    name = choose_model_set(source, rate, bearing).name
+    core = Diagnoser(config_for(name), name, bearing, rate)
+    core.tell_speed(RPM)  # measured: what the bag's shaft speeds tell the diagnosers
+    return core
+
+
+def feed(core, rate: float, x, chunk: float) -> list:
+    """Both hypotheses' residual streams = ``x`` (model set none: the measurement) in chunks of
+    ``chunk`` s; returns the decisions."""
+    from bearing_common.states import FaultState
+    n = max(1, int(round(chunk * rate)))
+    return [d for i0 in range(0, x.size, n) for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE)
+            for d in core.update(h, i0, rate, x[i0:i0 + n], fault_frequency=100.0)]
+
+
+@functools.cache
+def decision_shape(rate: float, source: str = SOURCE, seconds: float = SIGNAL_S) -> tuple:
+    """(samples between two decisions of one motor, the names of a decision's scores), measured on
+    the decision itself fed 3 s of the normal signal (the relay diagnosers publish alike)."""
+    decisions = feed(motor_decision(rate, source), rate, signals(rate, seconds)["normal"][: int(3.0 * rate)], 3.0)
+    hop = float(np.median(np.diff(sorted({d.window_end for d in decisions}))))
+    return int(round(hop * rate)), tuple(decisions[-1].scores.as_dict())
+
+
+def decision_cores(rate: float, chunk: float, source: str = SOURCE, seconds: float = SIGNAL_S) -> float:
+    """Cores one motor's decision alone takes (CPU s per s of signal, this process, one thread),
+    averaged over the bag's signals (each fault's ``seconds`` s in ``chunk``-s chunks, from its
+    first sample, as in a trial): the part of a diagnoser's CPU no message layout changes."""
+    cpu = 0.0
+    for x in signals(rate, seconds).values():
+        core = motor_decision(rate, source)
+        t0 = time.process_time()
+        feed(core, rate, x, chunk)
+        cpu += time.process_time() - t0
+    return cpu / (seconds * len(FAULTS))
 
 
 # -- /proc -------------------------------------------------------------------------------
@@ -327,14 +363,13 @@ class Listener:
                                           lambda raw, m=m: self._on_chunk(m, raw),
                                           topics.qos(topics.VIBRATION, depth=1000), raw=True)
             self.subscribed[m].add(topics.VIBRATION)
-        for m in (motors if graph == "relay" else self.arrivals):
+        for m in motors:  # both graphs alike: each of their publishers serves the same readers
             self.node.create_subscription(state_type, topics.qualified(m, topics.FAULT_STATE),
                                           lambda msg, m=m: self._on_state(m, msg),
                                           topics.qos(topics.FAULT_STATE, depth=1000))
             self.subscribed[m].add(topics.FAULT_STATE)
-        if graph == "monitoring":
-            self.node.create_subscription(topics.message_class(topics.DIAGNOSTICS.msgtype), topics.DIAGNOSTICS.name,
-                                          self._on_diagnostics, topics.qos(topics.DIAGNOSTICS, depth=1000))
+        self.node.create_subscription(topics.message_class(topics.DIAGNOSTICS.msgtype), topics.DIAGNOSTICS.name,
+                                      self._on_diagnostics, topics.qos(topics.DIAGNOSTICS, depth=1000))
         self.executor = event_executor(self.context)
         self.executor.add_node(self.node)
 
@@ -423,11 +458,14 @@ def snapshot(pids: dict, fn) -> dict:
     return out
 
 
-def trial_argv(proc, params: pathlib.Path, graph: str, hop: int) -> list:
-    """A process's command line: the fleet's, or for a multi-node process the relays in its place."""
+def trial_argv(proc, params: pathlib.Path, graph: str, shape: tuple) -> list:
+    """A process's command line: the fleet's, or for a multi-node process the relays in its place
+    (``shape``: :func:`decision_shape`)."""
     from bearing_bringup.graph_cli import process_argv
     if graph == "relay" and proc.executable == "nodes":
-        return [sys.executable, str(RELAY), "--hop", str(hop), *proc.arguments, *proc.ros_arguments(params)]
+        hop, scores = shape
+        return [sys.executable, str(RELAY), "--hop", str(hop), "--scores", ",".join(scores), *proc.arguments,
+                *proc.ros_arguments(params)]
     return process_argv(proc, params)
 
 
@@ -455,7 +493,7 @@ def run_trial(n: int, setup: Setup) -> Trial:
     domain = 200 + (os.getpid() + next(DOMAINS)) % 30
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     offsets = start_offsets(n, setup.rate, setup.chunk)
-    hop = decision_hop(setup.rate, setup.source)
+    shape = decision_shape(setup.rate, setup.source, setup.seconds)
     with tempfile.TemporaryDirectory(prefix="fleet_bench_") as tmp_name:
         tmp = pathlib.Path(tmp_name)
         played = make_bag(tmp / "bag", n, setup.rate, setup.chunk, setup.seconds, setup.source)
@@ -468,7 +506,7 @@ def run_trial(n: int, setup: Setup) -> Trial:
         try:
             started = time.monotonic()
             for proc in processes(fleet):
-                group.start(proc.name, trial_argv(proc, params, setup.graph, hop))
+                group.start(proc.name, trial_argv(proc, params, setup.graph, shape))
             listener.spin_until(listener.listening, READY_TIMEOUT_S, "every node to listen", group)
             startup = time.monotonic() - started
             group.start(PLAYER, [sys.executable, "-m", "bearing_recordings.bag_cli", "play", str(tmp / "bag"),
@@ -482,7 +520,7 @@ def run_trial(n: int, setup: Setup) -> Trial:
             pss = snapshot(pids, pss_mib)  # while everything still runs
             listener.spin_until(lambda: listener.signal_received() >= last - 1e-6, 30.0, "the last chunks", group)
             cpu1, wall, busy = snapshot(pids, cpu_seconds), time.monotonic() - wall0, machine_busy() - busy0
-            dropped = drain(listener, played, setup, notes, group)
+            dropped = drain(listener, played, setup, shape[0], notes, group)
         finally:
             group.stop()
             listener.close()
@@ -493,14 +531,15 @@ def run_trial(n: int, setup: Setup) -> Trial:
                  others, notes)
 
 
-def drain(listener: Listener, played: int, setup: Setup, notes: list, group) -> int:
-    """Wait until every chunk is decided; return the chunks dropped (the relays count none: 0)."""
+def drain(listener: Listener, played: int, setup: Setup, hop: int, notes: list, group) -> int:
+    """Wait until every chunk is decided (the relays: their last states, ``hop`` samples apart);
+    return the chunks dropped (the relays count none: 0)."""
     try:
         if setup.graph == "monitoring":
             listener.spin_until(lambda: listener.accepted() >= 2 * played, DRAIN_TIMEOUT_S,
                                 "every chunk to be decided", group)
         else:
-            end = played * setup.chunk - decision_hop(setup.rate, setup.source) / setup.rate - setup.chunk
+            end = played * setup.chunk - hop / setup.rate - setup.chunk
             listener.spin_until(lambda: listener.decided_until() >= end, DRAIN_TIMEOUT_S,
                                 "every motor's last states", group)
     except RuntimeError as exc:
@@ -630,11 +669,61 @@ def chunk_rows(setups: list, report) -> list:
     return rows
 
 
-def bench_fleet_capacity() -> list:
-    """Most motors in real time per sample rate and chunk size, motors per core, latency, CPU
-    per motor against the relays' floor."""
-    return chunk_rows([Setup(rate, chunk) for rate in RATES for chunk in CHUNKS],
-                      lambda line: print(f"[bench]   {line}", flush=True))
+CHUNK_MOTORS = 4  #: motors of make bench's per-chunk trials
+CHUNK_SIGNAL_S = 8.0  #: s of signal per motor in those trials
+CHUNK_QUIET_WAIT_S = 10.0  #: their longest wait for a quiet machine (others' load is reported instead)
+
+
+def per_chunk_rows(trials: dict, decision: dict) -> list:
+    """Rows of :func:`bench_fleet_chunks`: ``trials[rate, chunk, graph]``, ``decision[rate, chunk]``
+    (:func:`decision_cores`); motors per core are the monitoring processes' (1 / their cores per
+    motor), each chunk's also as a multiple of the 0.01 s chunks'; the CPU per motor as a ratio to
+    the relays' (the floor), whole and without the decision's own work."""
+    rows = []
+    for rate in RATES:
+        reference = trials[rate, CHUNKS[0], "monitoring"]
+        for chunk in CHUNKS:
+            mon, floor, dec = trials[rate, chunk, "monitoring"], trials[rate, chunk, "relay"], decision[rate, chunk]
+            what = f"fleet at {rate / 1000:g} kHz, {chunk:g} s chunks, {mon.motors} motors"
+            verdict = "real time" if mon.real_time else f"NOT real time (dropped {mon.dropped}, p95 {mon.p95:.0f} ms)"
+            rows += [
+                (f"{what}: monitoring CPU per motor / bare rclpy relays' in their place (same run; "
+                 f"the floor, target <= 1.5); {verdict}",
+                 f"{mon.per_motor:.4f} / {floor.per_motor:.4f} = {mon.per_motor / floor.per_motor:.2f}",
+                 "cores, ratio"),
+                (f"{what}: one motor's decision alone (same signals and chunks, this process); its share "
+                 "of the monitoring CPU per motor; (monitoring - decision) / the floor",
+                 f"{dec:.4f}; {dec / mon.per_motor:.2f}; {(mon.per_motor - dec) / floor.per_motor:.2f}",
+                 "cores, ratio, ratio"),
+                (f"{what}: motors per core of the monitoring (1 / its CPU per motor); / those with "
+                 f"{CHUNKS[0]:g} s chunks (same run; target >= 10 at 0.1 s); the same multiple for the floor",
+                 f"{1 / mon.per_motor:.1f}; {reference.per_motor / mon.per_motor:.2f}; "
+                 f"{trials[rate, CHUNKS[0], 'relay'].per_motor / floor.per_motor:.2f}", "motors/core, ratio, ratio"),
+                (f"{what}: latency chunk arrival -> fault_state p50 / p95; from the window's last sample p50 / p95",
+                 f"{np.median(mon.latency_ms):.1f} / {mon.p95:.1f}; {np.median(mon.sample_latency_ms):.0f} / "
+                 f"{np.percentile(mon.sample_latency_ms, 95):.0f}" if mon.latency_ms.size else "none measured", "ms"),
+            ]
+    others = [t.others for t in trials.values()]
+    rows.append(("fleet per-chunk trials: other users' load while they ran, min / max",
+                 f"{min(others):.2f} / {max(others):.2f}", "cores"))
+    return rows
+
+
+def bench_fleet_chunks() -> list:
+    """Per sample rate and chunk size: CPU per motor of :data:`CHUNK_MOTORS` monitored motors, of
+    bare relays in their place and of one motor's decision alone, in turn in the same run; motors
+    per core and the ratios to the floor (the capacity search is the standalone run, :func:`main`)."""
+    trials, decision = {}, {}
+    for rate in RATES:
+        for chunk in CHUNKS:
+            decision[rate, chunk] = decision_cores(rate, chunk, SOURCE, CHUNK_SIGNAL_S)
+            print(f"[bench]   {rate / 1000:g} kHz, {chunk:g} s chunks: one motor's decision alone "
+                  f"{decision[rate, chunk]:.4f} cores", flush=True)
+            for graph in GRAPHS:
+                setup = Setup(rate, chunk, graph, seconds=CHUNK_SIGNAL_S, quiet_wait=CHUNK_QUIET_WAIT_S)
+                trials[rate, chunk, graph] = run_trial(CHUNK_MOTORS, setup)
+                print(f"[bench]   {trials[rate, chunk, graph].line()}", flush=True)
+    return per_chunk_rows(trials, decision)
 
 
 def main(argv=None) -> int:
