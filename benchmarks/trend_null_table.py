@@ -16,8 +16,7 @@ from bearing_diagnoser.health import null_model
 #: The EWMA weights tabulated: the trend's default smoothing, and 1 (no smoothing: the running
 #: median itself, the trend's chart for large sudden changes).
 LAMBDAS = (0.2, 1.0)
-OUT = (pathlib.Path(__file__).resolve().parents[1] / "src" / "bearing_diagnoser" / "bearing_diagnoser" / "health"
-       / "null_table.py")
+OUT = pathlib.Path(__file__).resolve().parents[1] / "src/bearing_diagnoser/bearing_diagnoser/health/null_table.py"
 
 
 def main() -> None:

@@ -59,10 +59,12 @@ def read_snapshot(path: Path, channel: str = DEFAULT_CHANNEL) -> FemtoSnapshot:
         text = path.read_text(encoding="ascii")
     except (OSError, UnicodeDecodeError) as exc:
         raise SnapshotFileError(f"cannot read ({exc.__class__.__name__}: {exc})") from None
-    first = text.lstrip().split("\n", 1)[0]
-    delimiter = ";" if ";" in first else ","
+    lines = [line for line in text.splitlines() if line.strip()]
+    if not lines:
+        raise SnapshotFileError("empty file")
+    delimiter = ";" if ";" in lines[0] else ","
     try:
-        rows = np.loadtxt(text.splitlines(), delimiter=delimiter, ndmin=2)
+        rows = np.loadtxt(lines, delimiter=delimiter, ndmin=2)
     except ValueError as exc:
         raise SnapshotFileError(f"not a table of numbers ({' '.join(str(exc).split())})") from None
     if rows.shape[0] < MIN_ROWS:

@@ -285,7 +285,8 @@ def crossing_probability(u: float, fit: Ar1Fit, lam: float) -> float:
 
 def limit_for_rate(p_step: float, fit: Ar1Fit, lam: float) -> float:
     """The limit u ≥ 0 whose upward-crossing probability per step is ``p_step`` (0 when even
-    u = 0 is crossed less often: such a rate asks for every departure above the baseline)."""
+    u = 0 is crossed less often: such a rate asks for every departure above the baseline; inf
+    when no u up to 10⁴ is rare enough: a baseline too short to say anything that certain)."""
     from scipy.optimize import brentq
     if not p_step > 0.0:
         raise ValueError(f"crossing probability per step must be positive, got {p_step!r}")
@@ -295,4 +296,9 @@ def limit_for_rate(p_step: float, fit: Ar1Fit, lam: float) -> float:
     def excess(u):
         return math.log(max(crossing_probability(u, fit, lam), 1e-300)) - math.log(p_step)
 
-    return float(brentq(excess, 0.0, 40.0, xtol=1e-5))
+    hi = 40.0
+    while excess(hi) > 0.0:
+        if hi >= 1e4:
+            return math.inf
+        hi *= 4.0
+    return float(brentq(excess, 0.0, hi, xtol=1e-5))

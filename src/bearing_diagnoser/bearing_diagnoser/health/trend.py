@@ -174,8 +174,13 @@ class TrendRecord:
         return out
 
 
+def _finite(v: float) -> float | None:
+    """``v``, or None where JSON has no number (inf: a limit a too short baseline cannot set)."""
+    return float(v) if math.isfinite(v) else None
+
+
 def _clean(d: dict) -> dict:
-    return {k: (float(v) if math.isfinite(v) else None) for k, v in d.items()}
+    return {k: _finite(v) for k, v in d.items()}
 
 
 @dataclass
@@ -362,7 +367,8 @@ class HealthTrend:
         lim = self.limits()
         out["baseline"] = {"snapshots": b.snapshots, "end": b.end, "interval": b.interval,
                            "indicators": {n: {"level": lim[n][0], "sigma": ib.fit.sigma, "phi": ib.fit.phi,
-                                              "ewma_limits": list(lim[n][1]), "median_limits": list(lim[n][2])}
+                                              "ewma_limits": [_finite(v) for v in lim[n][1]],
+                                              "median_limits": [_finite(v) for v in lim[n][2]]}
                                           for n, ib in b.indicators.items()}}
         return out
 
