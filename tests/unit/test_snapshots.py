@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
+from synthetic_snapshots import FS, femto_rows, write_femto
 
 from bearing_common.units import STANDARD_GRAVITY
 from bearing_recordings.recording import InputError
 from bearing_recordings.snapshots import cut_stretch, open_snapshots
-from synthetic_snapshots import FS, femto_rows, write_femto
 
 
 def test_femto_folder_times_from_the_snapshot_clocks_and_channels(tmp_path):

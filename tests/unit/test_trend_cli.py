@@ -6,9 +6,9 @@ import sys
 
 import numpy as np
 import pytest
+from synthetic_snapshots import write_femto_file
 
 from bearing_diagnoser.health.trend_cli import main
-from synthetic_snapshots import write_femto_file
 
 N_ROWS = 1024  # 0.04 s snapshots keep the test fast
 
