@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup demo test unit lint fuzz bench accuracy soak clean
+.PHONY: setup demo test unit lint fuzz bench accuracy trend soak clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -34,6 +34,10 @@ bench: setup
 # decisions on every development recording, against the textbook baseline, with ablations
 accuracy: setup
 	@$(VENV_PY) benchmarks/accuracy_report.py --out out/accuracy.md
+
+# early warning on the six FEMTO lives (against the textbook rule) and on healthy recordings -> out/trend.md
+trend: setup
+	@$(VENV_PY) benchmarks/trend_report.py --out out/trend.md
 
 # the whole graph at real time for SOAK_MINUTES (default 30) -> out/soak.md
 SOAK_MINUTES ?= 30
