@@ -35,7 +35,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 DATA = Path(os.environ.get("BEARING_DATA_DIR", ROOT.parent / "shared" / "data"))
 BEARINGS = ("Bearing1_1", "Bearing1_2", "Bearing2_1", "Bearing2_2", "Bearing3_1", "Bearing3_2")
-FIGURE = ROOT / "docs" / "figures" / "health" / "trend_Bearing1_1.png"
+FIGURE = ROOT / "docs/figures/health/trend_Bearing1_1.png"
 
 #: Healthy recordings of the other rigs: (name, file, sample rate, channel).
 HEALTHY = (
