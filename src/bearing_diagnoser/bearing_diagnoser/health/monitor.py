@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..sensor_health import check_window
+from ..decision.sensor_health import check_window
 from .indicators import ConditionIndicators, condition_indicators, default_envelope_band
 from .iso20816 import DEFAULT_MACHINE_CLASS, iso_zone, machine_class
 from .trend import HealthTrend, TrendConfig, TrendRecord
