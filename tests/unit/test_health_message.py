@@ -7,7 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from bearing_common.bearings import load_bearing
-from bearing_diagnoser.health.monitor import HealthMonitor
+from bearing_diagnoser.health.monitor import FaultEvidence, HealthMonitor
 from bearing_diagnoser.health.trend import HealthState, TrendConfig
 
 
@@ -35,8 +35,10 @@ def test_monitor_record_fills_the_message():
     rng = np.random.default_rng(0)
     fs = 25600.0
     for k in range(8):
+        evidence = FaultEvidence({"outer_race": 6.5, "inner_race": 0.2}, {"outer_race": 9.0},
+                                 {"ball": "sidebands 1.3 bins from their carriers, 4 needed"})
         rec = monitor.update(1000.0 + 60.0 * k, rng.standard_normal(2560) * (1 + 3 * (k >= 6)), fs,
-                             evidence={"outer_race": -6.5, "inner_race": -0.2}, untested=("ball",))
+                             evidence=evidence)
     msg = fill_health_message(msgs.HealthIndicators(), rec, monitor, frame_id="drive_end")
     back = deserialize_message(serialize_message(msg), msgs.HealthIndicators)
     assert back.header.stamp.sec == 1000 + 60 * 7 and back.header.frame_id == "drive_end"
@@ -48,7 +50,13 @@ def test_monitor_record_fills_the_message():
     assert back.state_since.sec == 1000 + int(rec.trend.since)
     assert list(back.trended) == list(monitor.tracker.names) and not back.learning
     assert list(back.hypotheses) == ["outer_race", "inner_race"] and list(back.untested) == ["ball"]
-    assert_allclose(back.evidence_log10p, [-6.5, -0.2])
+    assert_allclose(back.evidence, [6.5, 0.2])
+    assert back.evidence_accumulated[0] == 9.0 and math.isnan(back.evidence_accumulated[1])
+    assert list(back.untested_why) == ["sidebands 1.3 bins from their carriers, 4 needed"]
+    assert back.evidence_problem == ""
+    problem = fill_health_message(msgs.HealthIndicators(), monitor.update(
+        1480.0, rng.standard_normal(2560), fs, evidence=FaultEvidence(problem="shaft speed unknown")), monitor)
+    assert problem.evidence_problem == "shaft speed unknown" and not list(problem.hypotheses)
     assert math.isfinite(back.score) and back.moved in monitor.tracker.names
 
 

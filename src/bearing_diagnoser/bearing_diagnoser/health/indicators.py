@@ -101,6 +101,17 @@ def default_envelope_band(fs: float, f_top: float = 0.0) -> tuple | None:
     return (lo, hi) if hi > lo else None
 
 
+def fault_lines_top(bearing, rpm: float | None) -> float:
+    """3 × the highest fault impact rate + the shaft rate (Hz) of ``bearing``
+    (:class:`bearing_common.bearings.Bearing`) at ``rpm`` rev/min: the ``f_top`` of
+    :func:`default_envelope_band` that keeps the fault and shaft lines out of the demodulation
+    band; 0 when the speed is unknown."""
+    if not rpm:
+        return 0.0
+    f = bearing.frequencies(rpm)
+    return 3.0 * max(f.bpfo, f.bpfi, f.ball) + f.shaft
+
+
 def condition_indicators(x, fs: float, envelope_band: tuple | None = None) -> ConditionIndicators:
     """Indicators of acceleration ``x`` (m/s², shape (n,)) sampled at ``fs`` Hz.
 

@@ -17,7 +17,8 @@ def fill_health_message(msg, record, monitor, frame_id: str = ""):
     """Fill ``msg`` (a ``HealthIndicators``) from ``record`` of ``monitor``; returns ``msg``.
 
     Stamps: ``header.stamp`` = the window's first sample, ``state_since`` = when the state
-    began, both on the data's clock. The evidence arrays stay empty when the record has none.
+    began, both on the data's clock. The evidence arrays stay empty when the record has none
+    (``evidence_problem`` says why).
     """
     ind, trend = record.indicators, record.trend
     msg.header.stamp = to_stamp(record.t)
@@ -41,9 +42,15 @@ def fill_health_message(msg, record, monitor, frame_id: str = ""):
     msg.slope = float(trend.slope.get(trend.moved, math.nan)) if trend.moved else math.nan
     msg.trended = list(monitor.tracker.names)
     msg.level = [float(trend.level.get(n, math.nan)) for n in monitor.tracker.names]
-    evidence = record.evidence or {}
-    msg.hypotheses = list(evidence)
-    msg.evidence_log10p = [float(v) for v in evidence.values()]
-    msg.untested = list(record.untested)
+    ev = record.evidence
+    if ev is None:
+        msg.evidence_problem = "not computed"
+        return msg
+    msg.hypotheses = list(ev.significance)
+    msg.evidence = [float(v) for v in ev.significance.values()]
+    msg.evidence_accumulated = [float(ev.accumulated.get(h, math.nan)) for h in ev.significance]
+    msg.untested = list(ev.untested)
+    msg.untested_why = list(ev.untested.values())
+    msg.evidence_problem = ev.problem
     return msg
 

@@ -4,14 +4,14 @@
 per window or snapshot it checks the sensor, computes the condition indicators
 (:mod:`.indicators`), the ISO 20816-3 zone (:mod:`.iso20816`) and the trend
 (:mod:`.trend`), and returns a :class:`HealthRecord`. The fault-comb evidence per hypothesis
-is not computed here: the caller that has it (the spectral decision) passes it in, and the
-record carries it (optional; ``None`` when not computed).
+is not computed here: the caller that has it (the fault decision, :mod:`.health_session`)
+passes it in as :class:`FaultEvidence`, and the record carries it (``None`` when not
+computed at all).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,6 +20,38 @@ from ..decision.sensor_health import check_window
 from .indicators import ConditionIndicators, condition_indicators, default_envelope_band
 from .iso20816 import DEFAULT_MACHINE_CLASS, iso_zone, machine_class
 from .trend import HealthTrend, TrendConfig, TrendRecord
+
+
+@dataclass(frozen=True)
+class FaultEvidence:
+    """The fault decision's comb evidence for one window or snapshot, hypotheses by name.
+
+    Attributes
+    ----------
+    significance : dict
+        {hypothesis: the comb test's statistic ÷ its threshold} of the decided window that
+        ended last in this one, as the decision weighs it (the stronger of the window alone and
+        ``accumulated``; ≥ 1: significant at the decision's false-alarm rate; the numbers
+        ``fault_state`` publishes as its scores).
+    accumulated : dict
+        {hypothesis: the same of the evidence accumulated over recent windows or snapshots}
+        (the spectral decision's long horizon; empty when it holds none).
+    untested : dict
+        {hypothesis: why this window or snapshot could not test it} (too short to resolve its lines).
+    problem : str
+        Why there is no evidence ("" when there is): not diagnosed (sensor, speed, resolution),
+        no decision yet, the decision impossible.
+    """
+
+    significance: dict = field(default_factory=dict)
+    accumulated: dict = field(default_factory=dict)
+    untested: dict = field(default_factory=dict)
+    problem: str = ""
+
+    def to_json(self) -> dict:
+        out = {"significance": dict(self.significance), "accumulated": dict(self.accumulated),
+               "untested": dict(self.untested)}
+        return out | ({"problem": self.problem} if self.problem else {})
 
 
 @dataclass(frozen=True)
@@ -35,20 +67,15 @@ class HealthRecord:
         ``A``-``D`` (``""`` when the velocity could not be computed).
     trend : TrendRecord
         State, since when, slope (times relative to the first snapshot).
-    evidence : dict or None
-        Fault-comb evidence per hypothesis, ``{hypothesis: log10 p}`` (≤ 0; smaller = stronger
-        evidence of that fault's impact comb), as the spectral decision computed it for this
-        window; None when not computed.
-    untested : tuple of str
-        Hypotheses this window's length or band could not test (with ``evidence``).
+    evidence : FaultEvidence or None
+        The fault decision's comb evidence for it; None when not computed at all.
     """
 
     t: float
     indicators: ConditionIndicators
     iso_zone: str
     trend: TrendRecord
-    evidence: dict | None = None
-    untested: tuple = ()
+    evidence: FaultEvidence | None = None
 
     def to_json(self) -> dict:
         """One ``bearing-trend`` line: ``{"t", "state", "indicators", ...}`` (t relative, s)."""
@@ -56,8 +83,7 @@ class HealthRecord:
                "indicators": self.indicators.to_json(), "iso_zone": self.iso_zone or None,
                "trend": self.trend.to_json()}
         if self.evidence is not None:
-            out["evidence"] = {k: float(v) for k, v in self.evidence.items()}
-            out["untested"] = list(self.untested)
+            out["evidence"] = self.evidence.to_json()
         return out
 
 
@@ -85,13 +111,14 @@ class HealthMonitor:
         self.sensor_problems: list = []  # (t, problem) of the windows not scored
 
     def update(self, t: float, samples, sample_rate: float, envelope_band: tuple | None = None,
-               evidence: Mapping[str, float] | None = None, untested: Sequence[str] = ()) -> HealthRecord | None:
+               evidence: FaultEvidence | None = None) -> HealthRecord | None:
         """Score the window starting at ``t`` (s): ``samples`` in m/s² at ``sample_rate`` Hz.
 
-        ``envelope_band`` (Hz) overrides the default demodulation band (the spectral decision's
-        choice); ``evidence`` / ``untested`` are passed through to the record. Returns None,
+        ``envelope_band`` (Hz) overrides the default demodulation band (which stays put, so that
+        the envelope RMS trends one band over a life); ``evidence`` is passed through to the
+        record. Returns None,
         and records the problem in :attr:`sensor_problems`, when the sensor signal is unfit
-        (flat, clipped, coarsely quantised: :func:`bearing_diagnoser.sensor_health.check_window`);
+        (flat, clipped, coarsely quantised: :func:`bearing_diagnoser.decision.sensor_health.check_window`);
         such a window does not enter the trend.
         """
         x = np.asarray(samples, dtype=float)
@@ -103,7 +130,7 @@ class HealthMonitor:
         ind = condition_indicators(x, sample_rate, band)
         trend = self.tracker.update(t, ind.trended())
         zone = iso_zone(ind.velocity_rms, self.machine) if math.isfinite(ind.velocity_rms) else ""
-        return HealthRecord(float(t), ind, zone, trend, None if evidence is None else dict(evidence), tuple(untested))
+        return HealthRecord(float(t), ind, zone, trend, evidence)
 
     def summary(self) -> dict:
         """The trend's summary (:meth:`.trend.HealthTrend.summary`) and the windows not scored."""

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import enum
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -371,6 +372,24 @@ class HealthTrend:
                                               "median_limits": [_finite(v) for v in lim[n][2]]}
                                           for n, ib in b.indicators.items()}}
         return out
+
+
+_DURATION = re.compile(r"\s*([0-9]*\.?[0-9]+)\s*(s|min|h|d)\s*", re.IGNORECASE)
+_SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
+
+
+def parse_baseline(text: str, min_duration: float = 0.0) -> TrendConfig:
+    """The :class:`TrendConfig` of a baseline given as text: a count N (the first N windows or snapshots,
+    spanning at least ``min_duration`` s) or a duration such as ``2h``, ``45min``, ``600s`` (a stated
+    healthy period after the first); ValueError when unreadable."""
+    text = str(text).strip()
+    if text.isdigit():
+        return TrendConfig(baseline_snapshots=int(text), baseline_duration=float(min_duration))
+    m = _DURATION.fullmatch(text)
+    if not m:
+        raise ValueError(f"baseline {text!r}: give a number of snapshots (e.g. 30) or a duration "
+                         "(e.g. 2h, 45min, 600s)")
+    return TrendConfig(healthy_until=float(m.group(1)) * _SECONDS[m.group(2).lower()])
 
 
 def _log(v) -> float:

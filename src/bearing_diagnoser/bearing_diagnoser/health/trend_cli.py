@@ -5,7 +5,10 @@
 
 PATH is a folder of FEMTO ``acc_*.csv`` snapshots, a folder of ``.mat``/``.npz`` recordings
 (or one such file) or a rosbag2 directory (``bearing_recordings.snapshots``); each PATH is
-one machine's life, scored by :class:`.monitor.HealthMonitor`, the code the live node runs.
+one machine's life, fed as a snapshot sensor's chunks through the diagnoser session
+(:func:`monitor_pipeline`: the code the live node runs) — condition indicators and trend
+(:class:`.health_session.HealthSession`) with the fault-comb evidence each snapshot could
+give (``"evidence"``: a 0.1 s snapshot tests no hypothesis at 1800 rpm, and says why).
 Stdout: one JSON object per snapshot or window, ``{"t", "state", "indicators", ...}`` (t in s
 after the PATH's first snapshot, on the data's own clock), then ``{"summary": {...}}``; with
 several PATHs every line carries ``"path"``. Stderr: what was read and assumed, damaged
@@ -18,7 +21,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
 import sys
 
 EXIT_BAD_INPUT = 2
@@ -53,67 +55,72 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-_DURATION = re.compile(r"\s*([0-9]*\.?[0-9]+)\s*(s|min|h|d)\s*", re.IGNORECASE)
-_SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}
-
-
-def trend_config(baseline: str):
-    """The :class:`.trend.TrendConfig` for ``--baseline`` (a count or a duration); ValueError if unreadable."""
-    from .trend import TrendConfig
-    text = baseline.strip()
-    if text.isdigit():
-        return TrendConfig(baseline_snapshots=int(text))
-    m = _DURATION.fullmatch(text)
-    if not m:
-        raise ValueError(f"--baseline {baseline!r}: give a number of snapshots (e.g. 30) or a duration "
-                         "(e.g. 2h, 45min, 600s)")
-    return TrendConfig(healthy_until=float(m.group(1)) * _SECONDS[m.group(2).lower()])
-
-
-def _f_top(bearing_spec, rpm) -> float:
-    """3 × the highest fault impact rate + the shaft rate (Hz), when bearing and speed are known."""
-    if rpm is None or not bearing_spec:
-        return 0.0
-    from bearing_common.bearings import load_bearing
-    f = load_bearing(bearing_spec).frequencies(rpm)
-    return 3.0 * max(f.bpfo, f.bpfi, f.ball) + f.shaft
-
-
 def _say(text: str) -> None:
     print(f"{PROG}: {text}", file=sys.stderr)
 
 
-def run_path(path: str, args, tag: dict):
-    """Score one PATH; returns the HealthMonitor and the records (the records are printed as they come)."""
-    from bearing_recordings.snapshots import open_snapshots
+#: Relative difference within which a snapshot's sample rate (from its own clock: FEMTO) is the
+#: first snapshot's: the clock's microseconds over 0.1 s put 1e-5 of jitter on it.
+SAME_RATE = 1e-3
 
-    from .monitor import HealthMonitor
+
+def monitor_pipeline(source, args):
+    """The graph's sessions for one PATH, as the node runs them on a snapshot sensor: the diagnoser
+    session of model set ``none`` on the measurement (the spectral decision's comb evidence, the
+    condition trend), input mode ``snapshot``, the trend's parameters from the command line."""
+    from bearing_common.bearings import CATALOG, DEFAULT_BEARING, load_bearing
+    from bearing_recordings.recording import MEASURED_RPM_TOLERANCE
+
+    from ..diagnoser import STREAMS
+    from ..front_ends import config_for
+    from ..pipeline import MonitorPipeline
+    from .iso20816 import machine_class
+
+    spec = args.bearing or source.bearing
+    bearing = load_bearing(spec) if spec else CATALOG[DEFAULT_BEARING]
+    parameters = {"input_mode": "snapshot", "baseline": args.baseline, "baseline_min_duration": 0.0,
+                  "machine_class": machine_class(args.machine_class), "health_period": args.window}
+    return MonitorPipeline(bearing, "none", config_for("none"), source.rpm, observed=False, streams=STREAMS[:1],
+                           rpm_tolerance=MEASURED_RPM_TOLERANCE, parameters=parameters, strict=False)
+
+
+def run_path(path: str, args, tag: dict):
+    """Score one PATH through :func:`monitor_pipeline`; returns the HealthMonitor and the records (the
+    records are printed as they come)."""
+    from collections import Counter
+
+    from bearing_recordings.recording import InputError
+    from bearing_recordings.snapshots import open_snapshots
 
     source = open_snapshots(path, channel=args.channel, sample_rate=args.sample_rate, rpm=args.rpm,
                             window=args.window, units=args.units)
     for note in source.notes:
         _say(f"{path}: {note}")
-    bearing = args.bearing or source.bearing
-    monitor = HealthMonitor(trend_config(args.baseline), args.machine_class or None, _f_top(bearing, source.rpm))
-    records, t0 = [], None
+    pipeline, records, first, rate = None, [], None, None
+    no_evidence = Counter()
     for snap in source:
-        t0 = snap.t if t0 is None else t0
-        rec = monitor.update(snap.t, snap.samples, snap.sample_rate)
-        if rec is None:
-            continue
-        records.append(rec)
-        print(json.dumps({**tag, **rec.to_json()}), flush=True)
+        if pipeline is None:
+            pipeline, first, rate = monitor_pipeline(source, args), snap.t, snap.sample_rate
+        fs = rate if abs(snap.sample_rate / rate - 1.0) <= SAME_RATE else snap.sample_rate
+        pipeline.feed(int(round((snap.t - first) * fs)), fs, snap.samples, source.source or "snapshots", stamp=snap.t)
+        for rec in pipeline.diagnoser.take_health():
+            records.append(rec)
+            no_evidence[rec.evidence.problem if rec.evidence is not None else ""] += 1
+            print(json.dumps({**tag, **rec.to_json()}), flush=True)
     if source.damaged:
         name, why = source.damaged[0]
         _say(f"{path}: warning: {len(source.damaged)} damaged snapshot(s) skipped; first {name}: {why}")
-    if monitor.sensor_problems:
+    monitor = pipeline.diagnoser.condition.monitor if pipeline is not None else None
+    if monitor is not None and monitor.sensor_problems:
         t, why = monitor.sensor_problems[0]
         _say(f"{path}: warning: {len(monitor.sensor_problems)} snapshot(s) not scored (sensor problem), "
-             f"first at {t - (t0 or 0.0):.3f} s: {why}")
+             f"first at {t - (first or 0.0):.3f} s: {why}")
     if not records:
-        from bearing_recordings.recording import InputError
         raise InputError(f"{path}: no usable snapshot"
                          + (f" ({len(source.damaged)} damaged)" if source.damaged else ""))
+    problem, count = no_evidence.most_common(1)[0]
+    if problem:
+        _say(f"{path}: no fault-comb evidence for {count} of {len(records)} snapshot(s): {problem}")
     summary = monitor.summary()
     summary["damaged"] = len(source.damaged)
     summary["end"] = records[-1].trend.t
@@ -138,9 +145,11 @@ def main(argv=None) -> int:
     from bearing_common.bearings import BearingError
     from bearing_recordings.recording import InputError
 
+    from .trend import parse_baseline
+
     args = build_parser().parse_args(argv)
     try:
-        trend_config(args.baseline)
+        parse_baseline(args.baseline)
         if not (math.isfinite(args.window) and args.window > 0):
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
         if args.machine_class:
