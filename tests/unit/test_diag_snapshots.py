@@ -202,3 +202,15 @@ def test_a_records_evidence_is_the_last_decided_window_inside_it():
     assert rec.evidence.problem == "not diagnosed: shaft speed not confirmed"
     (rec,) = h.push(2.0, FS, white_noise(1.0, FS, 4e-3), False, 0.0, no_evidence="shaft speed unknown")
     assert rec.evidence.problem == "shaft speed unknown"
+
+
+def test_a_stream_that_follows_a_snapshot_is_cut_into_windows_from_its_first_chunk():
+    """Auto mode: a chunk alone, a snapshot 10 s later, then chunks that continue it (a stream again)."""
+    s, logged = session(input_mode="auto")
+    x = white_noise(3.0, FS, 4e-3)
+    feed(s, 0.0, 0, x[:1200])
+    feed(s, 10.0, 0, x[:1200])
+    for i in range(0, int(2.5 * FS), 1200):
+        feed(s, 10.1 + i / FS, 1200 + i, x[i:i + 1200])
+    assert [r.t for r in s.take_health()] == pytest.approx([0.0, 10.0, 10.1, 11.1])
+    assert any("a stream again" in t for _, t in logged)

@@ -141,11 +141,11 @@ class HealthSession:
 
     def _stream(self, stamp: float, y: np.ndarray, gap: bool, no_evidence: str) -> list[HealthRecord]:
         """Fill and cut the stream's windows."""
-        if gap:
-            if self._parts:
+        if gap or self._window_t is None:  # a pause, or the stream goes on after a snapshot scored whole
+            if gap and self._parts:
                 self.counts["broken windows"] += 1
             self._parts, self._window_t = [], stamp
-            self._pending_snapshot = True  # a chunk alone after a pause, until another continues it
+            self._pending_snapshot = gap  # a chunk alone after a pause, until another continues it
         else:
             self._pending_snapshot = False
         self._parts.append(y)

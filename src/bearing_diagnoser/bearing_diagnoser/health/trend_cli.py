@@ -149,7 +149,10 @@ def main(argv=None) -> int:
 
     args = build_parser().parse_args(argv)
     try:
-        parse_baseline(args.baseline)
+        try:
+            parse_baseline(args.baseline)
+        except ValueError as exc:
+            raise ValueError(f"--{exc}") from None
         if not (math.isfinite(args.window) and args.window > 0):
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
         if args.machine_class:
