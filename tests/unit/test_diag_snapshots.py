@@ -214,3 +214,14 @@ def test_a_stream_that_follows_a_snapshot_is_cut_into_windows_from_its_first_chu
         feed(s, 10.1 + i / FS, 1200 + i, x[i:i + 1200])
     assert [r.t for r in s.take_health()] == pytest.approx([0.0, 10.0, 10.1, 11.1])
     assert any("a stream again" in t for _, t in logged)
+
+
+def test_diagnostics_between_a_trend_begun_again_and_its_first_record():
+    """A restarted simulator (time back to 0): /diagnostics still shows the last record's condition."""
+    s, logged = session()
+    x = white_noise(2.0, FS, 4e-3)
+    for i in range(0, x.size, 1200):
+        feed(s, i / FS, i, x[i:i + 1200])
+    feed(s, 0.0, 0, x[:1200])
+    assert "begins again" in logged[-1][1]
+    assert float(s.health(3.0).values["condition since (s)"]) == pytest.approx(0.0)

@@ -424,7 +424,7 @@ class DiagnoserSession:
         if rec is None:
             return {}
         trend, ind = rec.trend, rec.indicators
-        t0 = self.condition.monitor.tracker.t0 if self.condition.monitor is not None else rec.t
+        t0 = rec.t - trend.t  # the record's trend's first window (a trend begun again has its own)
         b = self.condition.monitor.tracker.baseline if self.condition.monitor is not None else None
         out = {"condition": "learning the baseline" if trend.learning else trend.state.name,
                "condition since (s)": f"{t0 + trend.since:.3f}"}
