@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup demo test unit lint fuzz bench accuracy false-alarms soak clean
+.PHONY: setup demo test unit lint fuzz bench accuracy false-alarms trend soak clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -41,6 +41,10 @@ accuracy: setup
 FALSE_ALARM_HOURS ?= 10
 false-alarms: setup
 	@$(VENV_PY) benchmarks/false_alarms.py --hours $(FALSE_ALARM_HOURS) --out out/false_alarms.md
+
+# early warning on the six FEMTO lives (against the textbook rule) and on healthy recordings -> out/trend.md
+trend: setup
+	@$(VENV_PY) benchmarks/trend_report.py --out out/trend.md
 
 # the whole graph at real time for SOAK_MINUTES (default 30) -> out/soak.md
 SOAK_MINUTES ?= 30

@@ -5,7 +5,8 @@ PACKAGE = "bearing_diagnoser"
 setup(
     name=PACKAGE,
     version="0.1.0",
-    packages=[PACKAGE, f"{PACKAGE}.decision", f"{PACKAGE}.spectral", f"{PACKAGE}.fold"],
+    packages=[PACKAGE, f"{PACKAGE}.decision", f"{PACKAGE}.spectral", f"{PACKAGE}.fold",
+              f"{PACKAGE}.health"],
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
         ("share/" + PACKAGE, ["package.xml"]),
@@ -22,6 +23,7 @@ setup(
             'diagnoser = bearing_diagnoser.node:main',
             'bearing-diagnose = bearing_diagnoser.diagnose_cli:main',
             'bearing-accuracy = bearing_diagnoser.accuracy_cli:main',
+            'bearing-trend = bearing_diagnoser.health.trend_cli:main',
         ],
     },
 )

@@ -1,7 +1,8 @@
-"""The diagnoser node through real DDS: fault states, /diagnostics, a silent observer, staleness."""
+"""The diagnoser node through real DDS: fault states, health, /diagnostics, a silent observer, staleness."""
 
 import time
 
+import numpy as np
 import pytest
 
 from bearing_common import topics
@@ -39,10 +40,11 @@ def signal_normal_then_or(duration=0.4, change=0.2):
 def test_states_and_diagnostics_follow_the_residuals(ros_graph):
     states = ros_graph.subscribe(topics.FAULT_STATE)
     diags = ros_graph.subscribe(topics.DIAGNOSTICS)
+    health = ros_graph.subscribe(topics.HEALTH)
     pub_or = ros_graph.publisher(topics.RESIDUAL_OUTER_RACE)
     pub_ir = ros_graph.publisher(topics.RESIDUAL_INNER_RACE)
-    node = ros_graph.start("bearing_diagnoser", "diagnoser", params={"stale_timeout": 1.0,
-                                                                     "diagnostics_period": 0.2})
+    node = ros_graph.start("bearing_diagnoser", "diagnoser", params={"stale_timeout": 1.0, "diagnostics_period": 0.2,
+                                                                     "health_period": 0.1})
     ros_graph.wait_until(lambda: pub_or.get_subscription_count() and pub_ir.get_subscription_count(),
                          30.0, "the diagnoser to subscribe")
     y = signal_normal_then_or()
@@ -58,6 +60,14 @@ def test_states_and_diagnostics_follow_the_residuals(ros_graph):
     assert 0.17 <= onset <= 0.25 and decided - 0.2 <= 0.05
     assert all(m.state == FaultState.NORMAL for m in states[:states.index(first_or)])
     assert "outer_race" in list(first_or.hypotheses) and 0.0 <= first_or.confidence <= 1.0
+    # health: one message per 0.1 s of the measurement (both streams carry it: counted once), stamped at
+    # the window's first sample, the indicators of that window, the fault evidence or why there is none.
+    ros_graph.wait_until(lambda: len(health) >= 4, 10.0, "four health messages")
+    assert [m.header.stamp.nanosec for m in health[:4]] == [0, 100_000_000, 200_000_000, 300_000_000]
+    assert [m.rms for m in health[:4]] == pytest.approx([np.std(y[k * 4800:(k + 1) * 4800]) for k in range(4)],
+                                                        rel=1e-9)
+    assert health[3].rms > 3 * health[0].rms and health[3].kurtosis > 3 * health[0].kurtosis  # the bursts
+    assert all(list(m.hypotheses) or m.evidence_problem for m in health[:4]) and health[0].learning
     # /diagnostics: ERROR for the fault while residuals flow; STALE once they stop.
     ros_graph.wait_until(lambda: any(s.level == b"\x03" for d in diags for s in d.status), 10.0,
                          "/diagnostics to go STALE")
@@ -65,6 +75,9 @@ def test_states_and_diagnostics_follow_the_residuals(ros_graph):
     assert b"\x02" in levels[:levels.index(b"\x03")]  # ERROR while the fault was current
     stale = next(s for d in diags for s in d.status if s.level == b"\x03")
     assert "no residuals" in stale.message
+    values = {kv.key: kv.value for kv in stale.values}
+    assert values["condition"] == "learning the baseline" and float(values["rms (m/s^2)"]) == pytest.approx(
+        health[-1].rms, rel=1e-3)
     assert node.returncode is None
 
 

@@ -97,3 +97,68 @@ def test_a_refused_chunk_claiming_a_restart_changes_nothing():
     assert not stream.check(t + 5.0, i, 0.0, x).accepted  # index 0, but a malformed rate
     v = stream.check(*chunk(3))
     assert v.accepted and not v.resync and not v.restart
+
+
+# -- snapshot sensors: a short chunk now and then, each a snapshot of its own ------------------------
+
+def snapshot(k, n=2560, interval=60.0, index="continued", fs=25600.0):
+    """Snapshot ``k`` of a sensor sending ``n`` samples every ``interval`` s, its sample index
+    numbered as some sensors do: on as if sampling never stopped, on without the pause, or from 0."""
+    first = {"continued": int(round(k * interval * fs)), "packed": k * n, "zero": 0}[index]
+    return k * interval, first, fs, np.ones(n)
+
+
+@pytest.mark.parametrize("index", ["continued", "packed", "zero"])
+def test_snapshot_mode_takes_every_paused_chunk_as_a_new_snapshot(index):
+    stream = ChunkStream("vib", input_mode="snapshot")
+    verdicts = [stream.check(*snapshot(k, index=index)) for k in range(5)]
+    assert all(v.accepted and v.resync and v.snapshot and not v.restart for v in verdicts)
+    assert [v.reason for v in verdicts[1:]] == [""] * 4  # nothing to log for a snapshot's pause
+    assert stream.counts["snapshots"] == 5 and stream.counts["gaps"] == 0
+
+
+@pytest.mark.parametrize("index", ["continued", "packed", "zero"])
+def test_auto_mode_recognises_a_snapshot_sensor_at_its_second_snapshot(index):
+    stream = ChunkStream("vib", input_mode="auto")
+    verdicts = [stream.check(*snapshot(k, index=index)) for k in range(5)]
+    assert all(v.accepted and v.resync and not v.restart for v in verdicts)
+    assert [v.snapshot for v in verdicts] == [False, True, True, True, True]
+    assert "snapshot sensor" in verdicts[1].reason and [v.reason for v in verdicts[2:]] == [""] * 3
+    assert stream.counts["snapshots"] == 5 and stream.counts["gaps"] == 0  # the first chunk counted too
+
+
+def test_auto_mode_keeps_a_stream_with_a_lost_chunk_a_stream():
+    stream = ChunkStream("vib", input_mode="auto")
+    verdicts = [stream.check(*chunk(i)) for i in (0, 1, 2, 4, 5, 6)]  # chunk 3 lost
+    assert not any(v.snapshot for v in verdicts)
+    assert "gap of 480 samples" in verdicts[3].reason and stream.counts["gaps"] == 1
+    assert stream.counts["snapshots"] == 0
+
+
+def test_auto_mode_returns_to_a_stream_when_chunks_continue_each_other():
+    stream = ChunkStream("vib", input_mode="auto")
+    verdicts = [stream.check(*chunk(i)) for i in (0, 2, 4, 5, 6)]  # one-chunk stretches, then a stream
+    assert [v.snapshot for v in verdicts] == [False, True, True, False, False]
+    assert "a stream again" in verdicts[3].reason and not verdicts[3].resync
+    assert stream.counts["snapshots"] == 3 and stream.counts["gaps"] == 0
+
+
+def test_snapshots_going_back_in_time_are_refused_and_a_replay_from_zero_is_a_restart():
+    stream = ChunkStream("vib", input_mode="snapshot")
+    for k in range(3):
+        stream.check(*snapshot(k))
+    t, i, fs, x = snapshot(1)
+    assert "out-of-order" in stream.check(t, i, fs, x).reason
+    v = stream.check(*snapshot(0))  # index 0 at the first snapshot's time: the replay began again
+    assert v.accepted and v.restart and v.reason == "stream restarted"
+
+
+def test_stream_mode_counts_a_snapshot_sensors_pauses_as_gaps():
+    stream = ChunkStream("vib")
+    verdicts = [stream.check(*snapshot(k)) for k in range(3)]
+    assert not any(v.snapshot for v in verdicts) and stream.counts["gaps"] == 2
+
+
+def test_an_unknown_input_mode_is_refused():
+    with pytest.raises(ValueError, match="input_mode must be one of auto, stream, snapshot"):
+        ChunkStream("vib", input_mode="burst")

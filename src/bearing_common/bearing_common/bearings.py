@@ -163,10 +163,14 @@ CATALOG: dict[str, Bearing] = {
     "mfpt": Bearing("NICE (MFPT rig)", 8, 0.235 * INCH, 1.245 * INCH),
     # Rexnord ZA-2115 double-row roller bearing of the IMS run-to-failure rig
     "za2115": Bearing("Rexnord ZA-2115 (IMS rig)", 16, 0.331 * INCH, 2.815 * INCH, math.radians(15.17)),
+    # FEMTO-ST PRONOSTIA accelerated-life test bearing (IEEE PHM 2012 challenge, Appendix A.1;
+    # contact angle not stated: deep-groove ball bearing, 0): BPFO 5.611, BPFI 7.389 x shaft
+    "femto": Bearing("PRONOSTIA test bearing (FEMTO-ST)", 13, 3.5e-3, 25.6e-3),
 }
 
 #: Other names accepted for catalog entries.
-ALIASES = {"cwru_de": "6205", "cwru_fe": "6203", "skf6205": "6205", "skf6203": "6203", "ims": "za2115"}
+ALIASES = {"cwru_de": "6205", "cwru_fe": "6203", "skf6205": "6205", "skf6203": "6203", "ims": "za2115",
+           "pronostia": "femto"}
 
 #: The default bearing: the CWRU drive end (the simulator's bearing, thesis table 2.1).
 DEFAULT_BEARING = "6205"

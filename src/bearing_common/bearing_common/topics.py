@@ -21,6 +21,10 @@ QoS, chosen on purpose:
   decisions (the diagnoser catching up) does not overwrite samples a reliable reader has
   not acknowledged yet, as keep-last-1 would; ``sim/truth`` keeps the last 10 changes;
 * ``fleet_state``: reliable, transient local, keep last 1 (the current summary);
+* ``health``: reliable, transient local, keep last 60 — a late dashboard or ``ros2 topic
+  echo`` gets the current condition at once, with the recent trend to draw: the last minute
+  of a stream (about 1 Hz) or the last hour of one-a-minute snapshots; reliable because the
+  messages are few and small and each carries a state change's time;
 * ``/diagnostics``: the ROS default (reliable, volatile, keep last 10), as
   ``diagnostic_aggregator`` expects.
 
@@ -65,6 +69,7 @@ RESIDUAL_OUTER_RACE = Topic("residual/outer_race", "bearing_msgs/msg/Residual", 
 RESIDUAL_INNER_RACE = Topic("residual/inner_race", "bearing_msgs/msg/Residual", 50, latched=True)
 FAULT_STATE = Topic("fault_state", "bearing_msgs/msg/FaultState", 10, latched=True)
 FLEET_STATE = Topic("fleet_state", "bearing_msgs/msg/FleetState", 1, latched=True)
+HEALTH = Topic("health", "bearing_msgs/msg/HealthIndicators", 60, latched=True)
 DIAGNOSTICS = Topic("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", 10)
 CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock", 10)
 
@@ -73,7 +78,7 @@ RESIDUALS = {FaultState.OUTER_RACE: RESIDUAL_OUTER_RACE, FaultState.INNER_RACE: 
 
 #: Every topic of one machine's graph, in the order recorders list them.
 GRAPH_TOPICS: dict[str, Topic] = {t.name: t for t in (
-    VIBRATION, UNBALANCE, SHAFT_SPEED, TRUTH, RESIDUAL_OUTER_RACE, RESIDUAL_INNER_RACE, FAULT_STATE,
+    VIBRATION, UNBALANCE, SHAFT_SPEED, TRUTH, RESIDUAL_OUTER_RACE, RESIDUAL_INNER_RACE, FAULT_STATE, HEALTH,
     DIAGNOSTICS)}
 
 

@@ -103,7 +103,8 @@ class Diagnoser:
 
     # -- feeding -----------------------------------------------------------------------
     def update(self, hypothesis, first_sample_index: int, sample_rate: float, residual,
-               estimate=None, impulse_train=None, fault_frequency: float | None = None) -> list[Decision]:
+               estimate=None, impulse_train=None, fault_frequency: float | None = None,
+               snapshot: bool = False) -> list[Decision]:
         """Feed one observer chunk; return the decisions that became due (oldest first).
 
         Parameters
@@ -118,6 +119,9 @@ class Diagnoser:
             r (m/s²), ŷ (m/s², None = 0: y = r, a model-free stream), u (None = no train).
         fault_frequency : float
             Hz at which the observer built its train (the fold front end folds there).
+        snapshot : bool
+            The chunk is a snapshot sensor's: scored alone for what its length resolves, evidence
+            accumulating across the pauses (:meth:`.decision.front_end.FrontEnd.push`).
         """
         h = _STREAM.get(hypothesis)  # FaultState(hypothesis) costs 1 us, twice a chunk
         if h is None:
@@ -147,7 +151,7 @@ class Diagnoser:
         y = r + e
         if front.reads_blocks or st.has_model or st.has_train:  # else the blocks are never read
             st.push(int(first_sample_index), y, r, u)
-        return self._decide(front.push(h, int(first_sample_index), y, self._streams, self.expected))
+        return self._decide(front.push(h, int(first_sample_index), y, self._streams, self.expected, snapshot))
 
     def flush(self) -> list[Decision]:
         """Decide every complete window with whatever streams exist (end of data)."""
@@ -156,15 +160,15 @@ class Diagnoser:
         return self._decide(self._front.flush(self._streams, self.expected))
 
     def _decide(self, verdicts: list[WindowVerdict]) -> list[Decision]:
-        """Window verdicts through the hysteresis; a window not diagnosed (a sensor or speed problem)
-        leaves the state as it is."""
+        """Window verdicts through the hysteresis; a window not diagnosed (a sensor, speed or
+        resolution problem) leaves the state as it is."""
         tr = self._tracker
         out = []
         for v in verdicts:
-            diagnosed = not (v.sensor_problem or v.speed_problem)
+            diagnosed = not (v.sensor_problem or v.speed_problem or v.resolution_problem)
             changed = diagnosed and tr.update(v.label, v.confidence, v.start, v.end, v.posterior, v.evidence_since)
             out.append(Decision(v.end, v.start, v.end, v.label, tr.state, tr.confidence, tr.onset, changed, v.scores,
-                                v.detail, v.sensor_problem, v.speed_problem))
+                                v.detail, v.sensor_problem, v.speed_problem, v.resolution_problem))
         if self.keep_history:
             self.history.extend(out)
         return out

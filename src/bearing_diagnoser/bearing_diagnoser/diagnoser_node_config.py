@@ -1,8 +1,24 @@
 """Parameters of the ``diagnoser`` node and the levels of its /diagnostics status (no rclpy)."""
 
 from bearing_common.bearings import DEFAULT_BEARING
-from bearing_common.parameters import ParameterSpec, bearing_check, non_negative, positive
+from bearing_common.chunk_stream import INPUT_MODE_HELP, INPUT_MODES
+from bearing_common.parameters import ParameterSpec, bearing_check, non_negative, one_of, positive
 from bearing_common.states import FaultState
+
+from .health.health_session import DEFAULT_PERIOD, HealthSettings
+from .health.iso20816 import DEFAULT_MACHINE_CLASS, ZONE_LIMITS_MM_S
+from .health.trend import HealthState, parse_baseline
+
+
+def _problem(parse):
+    """A parameter check from a parser that raises ValueError."""
+    def check(value):
+        try:
+            parse(value)
+        except ValueError as exc:
+            return str(exc)
+        return None
+    return check
 
 PARAMETERS = (
     ParameterSpec("bearing", DEFAULT_BEARING, "monitored bearing: catalog name (6205, 6203, mfpt, za2115), "
@@ -31,7 +47,25 @@ PARAMETERS = (
     ParameterSpec("motor", "", "the motor in /diagnostics (status bearing_monitor/<motor>/drive_end, hardware_id "
                   "<motor>); empty = the node's namespace without the leading slash, or the host's name in the "
                   "root namespace"),
+    ParameterSpec("input_mode", "auto", INPUT_MODE_HELP, one_of(*INPUT_MODES)),
+    ParameterSpec("health_period", DEFAULT_PERIOD, "seconds of a stream per health message (condition "
+                  "indicators and trend); each snapshot of a snapshot sensor is one message", positive),
+    ParameterSpec("machine_class", DEFAULT_MACHINE_CLASS, "ISO 20816-3 machine class of the velocity RMS zone: "
+                  + ", ".join(ZONE_LIMITS_MM_S) + " (group 1: 300 kW-50 MW, group 2: 15-300 kW)",
+                  one_of(*ZONE_LIMITS_MM_S), dynamic=True),
+    ParameterSpec("baseline", "30", "the healthy baseline of the condition trend: the first N windows or "
+                  "snapshots (a count, spanning at least baseline_min_duration), or a stated healthy period after "
+                  "the first (a duration: 2h, 45min, 600s)", _problem(parse_baseline)),
+    ParameterSpec("baseline_min_duration", 600.0, "seconds the counted baseline spans at least (a stream's 1 s "
+                  "windows then learn over 10 min, not 30 s); 0 = by count only", non_negative),
 )
+
+
+def health_settings(values: dict) -> HealthSettings:
+    """The health's settings from the parameter values."""
+    return HealthSettings(parse_baseline(values["baseline"], values["baseline_min_duration"]),
+                          values["machine_class"], float(values["health_period"]))
+
 
 #: Parameters whose change restarts the decision (new windows, thresholds or hypotheses).
 RESTART_ON = ("bearing", "model_set", "rpm", "rpm_tolerance", "window", "false_alarm_rate",
@@ -42,3 +76,6 @@ LEVEL_OK, LEVEL_WARN, LEVEL_ERROR, LEVEL_STALE = 0, 1, 2, 3
 STATE_LEVEL = {FaultState.NORMAL: LEVEL_OK, FaultState.OUTER_RACE: LEVEL_ERROR,
                FaultState.INNER_RACE: LEVEL_ERROR, FaultState.BALL: LEVEL_ERROR,
                FaultState.UNKNOWN: LEVEL_WARN}
+
+#: /diagnostics level of each condition trend state: an ALARM is as serious as a fault.
+TREND_LEVEL = {HealthState.HEALTHY: LEVEL_OK, HealthState.WARNING: LEVEL_WARN, HealthState.ALARM: LEVEL_ERROR}

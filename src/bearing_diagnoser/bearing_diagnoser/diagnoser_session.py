@@ -4,6 +4,15 @@ What the node does between ROS and the decision core:
 
 * every residual chunk passes :class:`bearing_common.chunk_stream.ChunkStream` (empty, huge,
   non-finite, wrong-rate, out-of-order chunks are rejected and counted);
+* snapshots (``input_mode``: a snapshot sensor's chunks, each a short waveform with a pause
+  before it; ``auto`` recognises them from the pauses): each is a snapshot, not a broken
+  stream — no gap is counted or logged, and the stale timeout stretches to the snapshots'
+  interval. The decision core places each at its stamp (sensors number their snapshots'
+  samples as they like) and scores it alone, its evidence accumulating across the pauses
+  (:meth:`.diagnoser.Diagnoser.update`);
+* condition: the measurement y = r + ŷ goes to :class:`.health.health_session.HealthSession`
+  (indicators and trend per 1 s window of a stream or per snapshot, with the decision's comb
+  evidence), drained by :meth:`DiagnoserSession.take_health` (the ``health`` topic);
 * restart rule: the decision core (:class:`.diagnoser.Diagnoser`) restarts when a stream that
   already fed it restarts (a restarted observer or sensor: index back to 0, a new rate) —
   its stream is then a new one —, when the residuals name another model set (observers
@@ -14,7 +23,9 @@ What the node does between ROS and the decision core:
   the stale timeout, WARN when one observer is silent, when the sensor signal is unusable
   (:mod:`.decision.sensor_health`), when a real machine's shaft speed is unknown (estimated blind
   from the vibration, which misses most faults: ``bearing-accuracy`` ablation) or the state
-  is UNKNOWN, ERROR for a fault, OK for NORMAL —, named ``bearing_monitor/<motor>/drive_end``
+  is UNKNOWN, ERROR for a fault, OK for NORMAL; at least WARN for a condition WARNING, ERROR
+  for a condition ALARM (the trend, with its indicators, since when and slope, in the
+  key-values) —, named ``bearing_monitor/<motor>/drive_end``
   with the motor as hardware id, so that ``diagnostic_aggregator`` groups a fleet's statuses
   (``config/diagnostic_aggregator.yaml``).
 """
@@ -23,6 +34,7 @@ from __future__ import annotations
 
 import math
 import socket
+from collections import deque
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -38,9 +50,18 @@ from .decision.config import DiagnoserConfig
 from .decision.scores import WindowScores
 from .decision.state_tracker import Decision
 from .diagnoser import STREAMS, Diagnoser
-from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL
+from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL, TREND_LEVEL, health_settings
 from .front_ends import MODEL_SET_DEFAULTS, config_for
+from .health.health_session import DecidedWindow, HealthSession
+from .health.indicators import fault_lines_top
+from .health.monitor import HealthRecord
 from .warm_up import warm_up
+
+#: Snapshot intervals a snapshot sensor may stay silent before /diagnostics reports it stale.
+SNAPSHOT_STALE_INTERVALS = 2.5
+
+#: Parameters of the condition trend (a change applies to the next record, or begins the trend again).
+HEALTH_PARAMETERS = ("machine_class", "baseline", "baseline_min_duration", "health_period")
 
 #: Fastest plausible shaft (rev/min): anything above is a broken speed source.
 MAX_RPM = 1e6
@@ -104,7 +125,8 @@ class DiagnoserSession:
         The decision's configuration as it is, instead of the one the parameters derive from
         the model set (offline runs: the textbook baseline, the ablations).
     keep_history : bool
-        Keep every window's decision in :attr:`history` (offline runs).
+        Keep every window's decision in :attr:`history` and every health record in
+        ``condition.history`` (offline runs).
     """
 
     def __init__(self, values: dict, log, log_period: float = 5.0, bearing: Bearing | None = None,
@@ -115,7 +137,15 @@ class DiagnoserSession:
         self._config = config
         self.bearing = bearing or load_bearing(values["bearing"])
         self.history: list[Decision] | None = [] if keep_history else None
-        self.streams = {h: ChunkStream(topics.residual_topic(h).name) for h in STREAMS}
+        self.streams = {h: ChunkStream(topics.residual_topic(h).name, input_mode=values["input_mode"])
+                        for h in STREAMS}
+        self.condition = HealthSession(health_settings(values), log, keep_history)
+        self._health_out: list[HealthRecord] = []
+        self.last_health: HealthRecord | None = None
+        self.snapshots = False  # whether the last accepted chunk was a snapshot sensor's
+        self._snapshot_arrivals = {h: deque(maxlen=2) for h in STREAMS}  # node times of the last snapshots
+        self._placed = False  # whether the core places chunks at their stamps (it has seen a snapshot)
+        self._next_index: dict = {}  # per stream, the core's index of its next sample
         self.core: Diagnoser | None = None
         self._fed: set = set()  # streams that fed the current core
         self.deployed: set = set()  # streams known to be deployed (fed a core, or publisher matched)
@@ -125,6 +155,8 @@ class DiagnoserSession:
         self.last_report: StateReport | None = None
         self.sensor_problem = ""
         self.speed_problem = ""
+        self.resolution_problem = ""  # the last window too short a snapshot to test any hypothesis
+        self.untested: dict = {}  # {hypothesis: why} the last window could not test
         self.speed_warning = ""  # the last window's measured speed disagreed with the told one
         self.decision_problem = ""  # why the last chunk could not be decided on (cleared by a good one)
         self.last_refusal = ""  # why the last refused chunk was refused
@@ -145,6 +177,8 @@ class DiagnoserSession:
         """Parameters changed (already applied to ``values``): restart the decision if they shape it."""
         if "bearing" in changed:
             self.bearing = load_bearing(self.values["bearing"])
+        if any(k in HEALTH_PARAMETERS for k in changed):
+            self.condition.configure(health_settings(self.values))
         if self.core is not None and any(k in RESTART_ON for k in changed):
             self._log("info", f"{', '.join(sorted(changed))} changed; the decision restarts with the next chunk")
             self.core = None
@@ -230,6 +264,11 @@ class DiagnoserSession:
             return self._refused(f"{stream.name}: array lengths differ")
         if not verdict.accepted:
             return self._refused(verdict.reason)
+        if verdict.snapshot != self.snapshots and verdict.reason:
+            self._log("info", verdict.reason)  # auto input mode recognised snapshots, or a stream again
+        self.snapshots = verdict.snapshot
+        if verdict.snapshot and verdict.resync:
+            self._snapshot_arrivals[hypothesis].append(now)
         switched = self.core is not None and not self.values["model_set"] and model_set != self.core.model_set
         if self.core is None or (verdict.restart and hypothesis in self._fed) or switched:
             if self.core is not None:
@@ -238,18 +277,57 @@ class DiagnoserSession:
             self.core = self._make_core(model_set, sample_rate)
             self._fed = set()
             self.time_offset = stamp - first_index / sample_rate
+            self._placed, self._next_index = False, {}
         self._fed.add(hypothesis)
         self.deployed.add(hypothesis)
+        index = self._core_index(hypothesis, verdict, stamp, first_index, sample_rate, r.size)
+        e = _array(estimate)
         try:
-            decisions = self.core.update(hypothesis, first_index, sample_rate, r, _array(estimate), _array(train),
-                                         fault_hz)
+            decisions = self.core.update(hypothesis, index, sample_rate, r, e, _array(train), fault_hz,
+                                         snapshot=verdict.snapshot)
         except ValueError as exc:
             stream.counts["rejected by decision"] += 1
             self.decision_problem = str(exc)
             self._log_repeatable("cannot decide", "warning", f"cannot decide: {exc}")
-            return []
-        self.decision_problem = ""
-        return self._published(decisions)
+            decisions = None
+        else:
+            self.decision_problem = ""
+        self._feed_condition(stamp, sample_rate, r if e is None else r + e, verdict, decisions or [])
+        return [] if decisions is None else self._published(decisions)
+
+    def _core_index(self, hypothesis: FaultState, verdict, stamp: float, first_index: int, sample_rate: float,
+                    n: int) -> int:
+        """The core's index of the chunk's first sample: the stream's own, until the core has seen a
+        snapshot; from then on a chunk that begins a stretch is placed at its stamp (a snapshot sensor
+        numbers its snapshots' samples as it likes), one that continues it follows on."""
+        self._placed = self._placed or verdict.snapshot
+        if not self._placed:
+            return first_index
+        if verdict.resync or hypothesis not in self._next_index:
+            index = int(round((stamp - self.time_offset) * sample_rate))
+        else:
+            index = self._next_index[hypothesis]
+        self._next_index[hypothesis] = index + n
+        return index
+
+    def _feed_condition(self, stamp: float, sample_rate: float, y: np.ndarray, verdict,
+                        decisions: list[Decision]) -> None:
+        """The measurement to the condition trend, with the windows just decided."""
+        self.condition.decided([DecidedWindow(self.time_offset + d.window_end, d.scores, d.problem) for d in decisions])
+        rpm = self.shaft_rpm or (float(self.values["rpm"]) or None)
+        no_evidence = self.decision_problem and f"cannot decide: {self.decision_problem}"
+        if not no_evidence and self.speed_unknown:
+            no_evidence = SPEED_UNKNOWN
+        records = self.condition.push(stamp, sample_rate, y, verdict.snapshot, fault_lines_top(self.bearing, rpm),
+                                   verdict.restart, no_evidence)
+        if records:
+            self._health_out.extend(records)
+            self.last_health = records[-1]
+
+    def take_health(self) -> list[HealthRecord]:
+        """The condition records completed since the last call (oldest first), for the ``health`` topic."""
+        out, self._health_out = self._health_out, []
+        return out
 
     def flush(self) -> list[StateReport]:
         """End of data (a recording's): decide every window that can still be decided."""
@@ -268,6 +346,7 @@ class DiagnoserSession:
     def _account(self, d: Decision) -> bool:
         """Remember a window's sensor verdict; True when its state is to be published."""
         self.sensor_problem, self.speed_problem = d.sensor_problem, d.speed_problem
+        self.resolution_problem, self.untested = d.resolution_problem, d.scores.untested
         self.speed_warning = d.scores.speed_warning()
         if self.speed_warning:
             self._log_repeatable("speed disagrees", "warning", self.speed_warning)
@@ -283,6 +362,9 @@ class DiagnoserSession:
     def health(self, now: float) -> Health:
         """The /diagnostics status at node time ``now`` (s)."""
         timeout = float(self.values["stale_timeout"])
+        interval = self.snapshot_interval
+        if self.snapshots and interval:
+            timeout = max(timeout, SNAPSHOT_STALE_INTERVALS * interval)
         silent = [topics.residual_topic(h).name for h, t in self.last_heard.items() if t is None or now - t > timeout]
         report = self.last_report
         state = report.state if report else FaultState.NORMAL
@@ -299,6 +381,11 @@ class DiagnoserSession:
             values[f"{stream.name} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
         if self.rejected_speeds:
             values["rejected shaft speeds"] = str(self.rejected_speeds)
+        values["input"] = f"snapshots, one every {interval:.3g} s" if self.snapshots and interval else (
+            "snapshots" if self.snapshots else "stream")
+        if self.untested:
+            values["untested"] = "; ".join(f"{h.label}: {why}" for h, why in self.untested.items())
+        values.update(self._condition_values())
         if len(silent) == len(self.last_heard):
             return Health(LEVEL_STALE, "no residuals: " + ", ".join(silent), values)
         level, message = STATE_LEVEL[state], state.name
@@ -309,6 +396,8 @@ class DiagnoserSession:
             values["sensor"] = self.sensor_problem
         elif self.speed_problem:
             level, message = max(level, LEVEL_WARN), f"not diagnosed: {self.speed_problem}"
+        elif self.resolution_problem:
+            level, message = max(level, LEVEL_WARN), f"not diagnosed: {self.resolution_problem}"
         elif self.speed_unknown:
             level, message = max(level, LEVEL_WARN), f"{message} ({SPEED_UNKNOWN})"
         elif self.speed_warning:
@@ -316,7 +405,45 @@ class DiagnoserSession:
         if silent:
             level = max(level, LEVEL_WARN)
             message += " (waiting for " + ", ".join(silent) + ")"
+        condition = self.last_health.trend if self.last_health is not None else None
+        if condition is not None and not condition.learning:
+            level = max(level, TREND_LEVEL[condition.state])
+            message += f"; condition {condition.state.name}"
         return Health(level, message, values)
+
+    @property
+    def snapshot_interval(self) -> float | None:
+        """Node seconds between a snapshot sensor's last two snapshots (None: fewer seen)."""
+        gaps = [b - a for a, b in (tuple(d) for d in self._snapshot_arrivals.values() if len(d) == 2)]
+        return max(gaps) if gaps else None
+
+    def _condition_values(self) -> dict:
+        """/diagnostics key-values of the condition: the trend (state, since when, slope) and the
+        indicators of the last record."""
+        rec = self.last_health
+        if rec is None:
+            return {}
+        trend, ind = rec.trend, rec.indicators
+        t0 = rec.t - trend.t  # the record's trend's first window (a trend begun again has its own)
+        b = self.condition.monitor.tracker.baseline if self.condition.monitor is not None else None
+        out = {"condition": "learning the baseline" if trend.learning else trend.state.name,
+               "condition since (s)": f"{t0 + trend.since:.3f}"}
+        if trend.moved:
+            out["condition moved"] = trend.moved
+            out["condition level (x baseline)"] = f"{trend.level.get(trend.moved, math.nan):.3g}"
+        slope = trend.slope.get(trend.moved) if trend.moved else None
+        if slope is not None and math.isfinite(slope):
+            out["condition slope (1/h)"] = f"{slope:+.3g}"
+        if b is not None:
+            out["condition baseline"] = f"{b.snapshots} windows or snapshots to {t0 + b.end:.3f} s"
+        out.update({"rms (m/s^2)": f"{ind.rms:.4g}", "peak (m/s^2)": f"{ind.peak:.4g}",
+                    "crest factor": f"{ind.crest_factor:.4g}", "kurtosis": f"{ind.kurtosis:.4g}",
+                    "velocity rms (mm/s)": f"{ind.velocity_rms * 1e3:.4g}",
+                    "iso 20816-3 zone": f"{rec.iso_zone or 'unknown'} ({self.condition.settings.machine})",
+                    "envelope rms (m/s^2)": f"{ind.envelope_rms:.4g}"})
+        if rec.evidence is not None and rec.evidence.problem:
+            out["condition fault evidence"] = rec.evidence.problem
+        return out
 
     @property
     def speed_unknown(self) -> bool:

@@ -5,8 +5,12 @@ Subscribes ``residual/outer_race``, ``residual/inner_race`` and ``shaft_speed``;
 state) on every decision, and ``/diagnostics`` (status ``bearing_monitor/<motor>/drive_end``,
 hardware id the motor: the ``motor`` parameter, the namespace or the host's name; OK NORMAL,
 ERROR a fault, WARN UNKNOWN, a silent observer or an unusable sensor signal, STALE no input;
-a last STALE "stopped" when the node ends). Signal timing comes from the residuals' stamps
-and sample indices only, so replays at any rate (with ``use_sim_time``) give the same
+a last STALE "stopped" when the node ends; the condition trend and its indicators in the
+key-values, a condition WARNING at least WARN, an ALARM ERROR), and ``health``
+(HealthIndicators, reliable + transient local, keep last 60: condition indicators, ISO
+20816-3 zone, trend state with since-time and slope, the fault-comb evidence per hypothesis;
+one per ``health_period`` s of a stream, one per snapshot of a snapshot sensor). Signal timing
+comes from the residuals' stamps and sample indices only, so replays at any rate (with ``use_sim_time``) give the same
 decisions. The logic lives in :class:`.diagnoser_session.DiagnoserSession`; this module only wires
 ROS to it.
 """
@@ -22,14 +26,15 @@ from bearing_common.parameters import declare
 from bearing_common.stamps import to_seconds, to_stamp
 from bearing_common.states import FaultState
 from bearing_msgs.msg import FaultState as FaultStateMsg
-from bearing_msgs.msg import Residual, ShaftSpeed
+from bearing_msgs.msg import HealthIndicators, Residual, ShaftSpeed
 
 from .diagnoser_node_config import PARAMETERS
-from .diagnoser_session import DiagnoserSession, Health, StateReport, motor_name, status_name
+from .diagnoser_session import SENSOR_LOCATION, DiagnoserSession, Health, StateReport, motor_name, status_name
+from .health.message import fill_health_message
 
 
 class DiagnoserNode(Node):
-    """Thin adapter: Residual chunks -> DiagnoserSession -> FaultState and /diagnostics."""
+    """Thin adapter: Residual chunks -> DiagnoserSession -> FaultState, HealthIndicators and /diagnostics."""
 
     def __init__(self, name: str = "diagnoser", namespace: str | None = None):
         super().__init__(name, namespace=namespace)
@@ -39,6 +44,7 @@ class DiagnoserNode(Node):
         self.session.warm_up()  # before subscribing: being subscribed means being ready
         self.pub_state = self.create_publisher(FaultStateMsg, topics.FAULT_STATE.name, topics.qos(topics.FAULT_STATE))
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
+        self.pub_health = self.create_publisher(HealthIndicators, topics.HEALTH.name, topics.qos(topics.HEALTH))
         self.residual_subscriptions = {
             h: self.create_subscription(Residual, topic.name, lambda msg, h=h: self.on_residual(h, msg),
                                         topics.qos(topic))
@@ -66,6 +72,9 @@ class DiagnoserNode(Node):
                                            msg.fault_frequency, msg.model_set, self._now())
         for report in reports:
             self.publish_state(report)
+        for record in self.session.take_health():
+            self.pub_health.publish(fill_health_message(HealthIndicators(), record, self.session.condition.monitor,
+                                                        msg.header.frame_id or SENSOR_LOCATION))
 
     def publish_state(self, report: StateReport) -> None:
         msg = FaultStateMsg(state=int(report.state), confidence=float(report.confidence),

@@ -10,7 +10,12 @@ gives by construction, not by a second wiring. Without observers (the textbook b
 as the residual of a model-free stream, as an observer of model set ``none`` would pass it.
 
 A recording is whole: a chunk that a session refuses (or a decision that cannot be made)
-is an :class:`~bearing_recordings.recording.InputError`, not a logged rejection.
+is an :class:`~bearing_recordings.recording.InputError`, not a logged rejection — unless the
+pipeline is not ``strict`` (``bearing-trend``: a life of snapshots whose condition is scored
+whether or not the decision can be made; the sessions count and say what they refused).
+The diagnoser session's condition records (:meth:`.diagnoser_session.DiagnoserSession.take_health`)
+are what the node publishes on ``health``; snapshots are fed with their own stamps
+(:meth:`MonitorPipeline.feed`, ``input_mode`` among ``parameters``).
 
 This module and :mod:`.recording_diagnosis` are the diagnoser's only users of the observer
 package (its sessions and its model-set registry).
@@ -83,19 +88,25 @@ class MonitorPipeline:
         The observer streams fed (one suffices for a front end that takes one measurement).
     keep_streams : bool
         Keep every residual, estimate and impulse train, for figures.
+    parameters : dict
+        More diagnoser parameters (:data:`.diagnoser_node_config.PARAMETERS`: ``input_mode``, the
+        condition trend's), as the node would be given them.
+    strict : bool
+        A refused chunk or a decision that cannot be made raises InputError (module docstring).
     """
 
     def __init__(self, bearing: Bearing, model_set: str, config: DiagnoserConfig, rpm: float | None = None,
                  observed: bool = True, streams: tuple = STREAMS, keep_streams: bool = False,
-                 rpm_tolerance: float | None = None):
+                 rpm_tolerance: float | None = None, parameters: dict | None = None, strict: bool = True):
         self.model_set = model_set
         self.streams = streams
+        self.strict = strict
         nominal = rpm or NOMINAL_RPM
-        self.observers = {h: ObserverSession(h, bearing, model_set, nominal, log=_log) for h in streams} \
-            if observed else {}
-        self.fault_hz = {h: fault_frequency(bearing, h, nominal) for h in streams}
         values = {p.name: p.default for p in PARAMETERS} | {"model_set": model_set, "bearing": bearing_spec(bearing),
-                                                             "rpm": float(rpm or 0.0)}
+                                                             "rpm": float(rpm or 0.0)} | (parameters or {})
+        self.observers = {h: ObserverSession(h, bearing, model_set, nominal, log=_log, input_mode=values["input_mode"])
+                          for h in streams} if observed else {}
+        self.fault_hz = {h: fault_frequency(bearing, h, nominal) for h in streams}
         if rpm_tolerance is not None:
             values["rpm_tolerance"] = float(rpm_tolerance)
         self.diagnoser = DiagnoserSession(values, _log, bearing=bearing, config=config, keep_history=True)
@@ -107,13 +118,16 @@ class MonitorPipeline:
         """Every window's decision so far (signal time: s from the recording's first sample)."""
         return self.diagnoser.history
 
-    def feed(self, first_index: int, sample_rate: float, samples: np.ndarray, source: str) -> None:
+    def feed(self, first_index: int, sample_rate: float, samples: np.ndarray, source: str,
+             stamp: float | None = None) -> None:
         """One vibration chunk (m/s²) whose first sample has index ``first_index``, as a sensor driver
-        publishes it (stamp = index / rate: the recording's clock)."""
-        stamp = first_index / sample_rate
+        publishes it: stamped ``stamp`` (s; default index / rate: the recording's clock)."""
+        stamp = first_index / sample_rate if stamp is None else float(stamp)
         for h in self.streams:
             if h in self.observers:
                 out = self.observers[h].on_chunk(stamp, first_index, sample_rate, source, samples)
+                if out is None and not self.strict:
+                    continue
                 if out is None:
                     raise InputError(f"the {h.label} observer cannot process this recording: "
                                      f"{dict(self.observers[h].counts)}")
@@ -129,13 +143,13 @@ class MonitorPipeline:
                 fault_hz: float, model_set: str) -> None:
         self.diagnoser.on_residual(h, stamp, first_index, sample_rate, residual, estimate, train, fault_hz,
                                    model_set, now=0.0)
-        if self.diagnoser.decision_problem or self.diagnoser.last_refusal:
+        if self.strict and (self.diagnoser.decision_problem or self.diagnoser.last_refusal):
             raise InputError(self.diagnoser.decision_problem or self.diagnoser.last_refusal)
 
     def finish(self) -> list[Decision]:
         """End of the recording: decide what can still be decided; every window's decision."""
         self.diagnoser.flush()
-        if self.diagnoser.decision_problem:
+        if self.strict and self.diagnoser.decision_problem:
             raise InputError(self.diagnoser.decision_problem)
         return self.decisions
 

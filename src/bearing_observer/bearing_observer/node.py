@@ -37,7 +37,7 @@ class ObserverNode(Node):
         values = declare(self, PARAMETERS, lambda changed: self.session.configure(changed))
         fault = parse_fault(values["fault_type"])
         self.session = ObserverSession(fault, load_bearing(values["bearing"]), values["model_set"], values["rpm"],
-                                       values["speed_tolerance"], log=self.log)
+                                       values["speed_tolerance"], log=self.log, input_mode=values["input_mode"])
         warm_up()  # compile or load the kernels now, not on the first chunks
         out = topics.residual_topic(fault)
         self.pub = self.create_publisher(Residual, out.name, topics.qos(out))

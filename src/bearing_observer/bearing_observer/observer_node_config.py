@@ -1,6 +1,7 @@
 """Parameters of the ``observer`` node (no rclpy): name, default, description, check, live or read-only."""
 
 from bearing_common.bearings import DEFAULT_BEARING
+from bearing_common.chunk_stream import INPUT_MODE_HELP, INPUT_MODES
 from bearing_common.parameters import ParameterSpec, bearing_check, one_of, positive
 from bearing_common.states import FaultState, parse_fault
 
@@ -33,6 +34,8 @@ PARAMETERS = (
                   dynamic=True),
     ParameterSpec("speed_tolerance", 0.001, "relative shaft-speed change that re-tunes the impulse train",
                   positive, dynamic=True),
+    ParameterSpec("input_mode", "auto", INPUT_MODE_HELP + "; a snapshot restarts the observer's state, quietly",
+                  one_of(*INPUT_MODES)),
 )
 
 

@@ -9,7 +9,8 @@ One :class:`ObserverSession` per node:
 * re-tunes the train to shaft-speed messages that differ by more than
   ``speed_tolerance`` (relative), phase kept continuous;
 * checks every chunk (:class:`bearing_common.chunk_stream.ChunkStream`): bad chunks are rejected and
-  counted; a gap or a restarted producer resets the observer state;
+  counted; a gap or a restarted producer resets the observer state, and so does each snapshot
+  of a snapshot sensor (``input_mode``), without counting or logging a gap;
 * never returns a non-finite value;
 * without a model (model set ``none``) passes the measurement through as the residual and
   computes nothing else: the estimate is 0 and no train drives a model, so both are left
@@ -72,6 +73,8 @@ class ObserverSession:
         Relative speed change that re-tunes the train.
     stream_name : str
         Name of the input stream in reasons.
+    input_mode : str
+        ``stream``, ``snapshot`` or ``auto`` (:data:`bearing_common.chunk_stream.INPUT_MODES`).
     log : callable
         ``log(level, text)``.
     log_period : float
@@ -80,13 +83,13 @@ class ObserverSession:
 
     def __init__(self, fault: FaultState, bearing: Bearing, model_set: str = "", rpm: float = 1800.0,
                  speed_tolerance: float = 1e-3, stream_name: str = topics.VIBRATION.name, log=_quiet,
-                 log_period: float = 5.0):
+                 log_period: float = 5.0, input_mode: str = "stream"):
         self.fault = FaultState(fault)
         self.bearing = bearing
         self.model_set = model_set
         self.rpm = float(rpm)
         self.speed_tolerance = float(speed_tolerance)
-        self.stream = ChunkStream(stream_name)
+        self.stream = ChunkStream(stream_name, input_mode=input_mode)
         self.log = log
         self._log_repeatable = LogThrottle(log, log_period)
         self.observer: FaultObserver | None = None

@@ -26,9 +26,10 @@ class WindowVerdict:
 
     ``posterior``: {state: probability} when the front end has one (the tracker then reports
     the mean posterior of the published state as its confidence); ``detail``: what was special
-    about the window (a missing stream); ``sensor_problem``, ``speed_problem``: why the window
-    was not diagnosed at all (the sensor signal unusable; the shaft speed not known well enough
-    to tell the parts apart; "" when it was); ``evidence_since``: when the evidence for the label began (s), when
+    about the window (a missing stream); ``sensor_problem``, ``speed_problem``,
+    ``resolution_problem``: why the window was not diagnosed at all (the sensor signal unusable;
+    the shaft speed not known well enough to tell the parts apart; a snapshot too short to
+    resolve any hypothesis' lines; "" when it was); ``evidence_since``: when the evidence for the label began (s), when
     the front end knows it better than the window (accumulated evidence).
     """
 
@@ -42,6 +43,7 @@ class WindowVerdict:
     sensor_problem: str = ""
     speed_problem: str = ""
     evidence_since: float | None = None
+    resolution_problem: str = ""
 
 
 class FrontEnd(Protocol):
@@ -67,10 +69,11 @@ class FrontEnd(Protocol):
         """Compute now what the first windows would otherwise wait for (thresholds)."""
 
     def push(self, hypothesis: FaultState, first_index: int, y, streams: dict[FaultState, StreamBlocks],
-             expected: set) -> list[WindowVerdict]:
+             expected: set, snapshot: bool = False) -> list[WindowVerdict]:
         """One stream's chunk: its measurement ``y`` from sample ``first_index`` (its blocks are already in
-        ``streams``); ``expected``: hypotheses whose streams are deployed but not seen yet. Returns the
-        windows that became due."""
+        ``streams``); ``expected``: hypotheses whose streams are deployed but not seen yet; ``snapshot``:
+        the chunk is a snapshot sensor's (scored alone; evidence may accumulate across the pause
+        before it). Returns the windows that became due."""
 
     def flush(self, streams: dict[FaultState, StreamBlocks], expected: set) -> list[WindowVerdict]:
         """End of data: decide what can still be decided."""

@@ -32,12 +32,16 @@ class WindowScores:
         {observer stream's hypothesis: the thesis' blocks} (:mod:`.thesis_blocks`):
         published as ``<hypothesis>_explained`` and ``<hypothesis>_xcorr``; only for streams
         that carry an identified model's estimate (explained) or an impulse train (xcorr).
+    untested : dict
+        {hypothesis: why the window could not test it} (a snapshot too short to resolve its
+        lines); such a hypothesis has no ``significance``.
     """
 
     rms: float = math.nan
     significance: dict = field(default_factory=dict)
     explained: dict = field(default_factory=dict)
     xcorr: dict = field(default_factory=dict)
+    untested: dict = field(default_factory=dict)
 
     #: Names summarised per segment (median over its windows), in the order the JSON lists them.
     SUMMARY_KEYS: ClassVar[tuple[str, ...]] = ()
@@ -55,6 +59,11 @@ class WindowScores:
     def speed_warning(self) -> str:
         """Why the speed the window used is not the told one ("" when it is, or none was measured)."""
         return ""
+
+    def accumulated(self) -> dict:
+        """{hypothesis: significance of the evidence accumulated over recent windows} (statistic ÷
+        threshold, as ``significance``); empty for a front end that accumulates none."""
+        return {}
 
     def as_dict(self) -> dict[str, float]:
         """Every number by its published name."""

@@ -35,8 +35,9 @@ class Decision:
     Times in seconds of signal time (sample index / sample rate from stream start).
     ``state`` is the published (hysteresis-filtered) state, ``label`` the window's own
     label; ``scores`` what the window showed (:mod:`.scores`); ``detail`` says what was
-    special about the window (a missing stream); ``sensor_problem`` and ``speed_problem`` why
-    the window was not diagnosed at all ("" when it was: then it took part in the hysteresis).
+    special about the window (a missing stream); ``sensor_problem``, ``speed_problem`` and
+    ``resolution_problem`` why the window was not diagnosed at all ("" when it was: then it
+    took part in the hysteresis).
     """
 
     time: float
@@ -51,11 +52,18 @@ class Decision:
     detail: str = ""
     sensor_problem: str = ""
     speed_problem: str = ""
+    resolution_problem: str = ""
+
+    @property
+    def problem(self) -> str:
+        """Why the window was not diagnosed ("" when it was)."""
+        return self.sensor_problem or self.speed_problem or self.resolution_problem
 
     @property
     def diagnosed(self) -> bool:
-        """Whether the window was diagnosed (it was fit to: the sensor signal usable, the speed known)."""
-        return not (self.sensor_problem or self.speed_problem)
+        """Whether the window was diagnosed (it was fit to: the sensor signal usable, the speed known, a
+        hypothesis resolved)."""
+        return not self.problem
 
 
 class StateTracker:

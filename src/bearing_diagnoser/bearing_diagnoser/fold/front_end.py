@@ -70,7 +70,9 @@ class FoldFrontEnd:
         self.thresholds()
 
     def push(self, hypothesis: FaultState, first_index: int, y, streams: dict[FaultState, StreamBlocks],
-             expected: set) -> list[WindowVerdict]:
+             expected: set, snapshot: bool = False) -> list[WindowVerdict]:
+        """A snapshot is no different here: the pause before it is a gap its windows never straddle,
+        so each snapshot is decided by the windows it holds alone."""
         return self._run(streams, expected)
 
     def flush(self, streams: dict[FaultState, StreamBlocks], expected: set) -> list[WindowVerdict]:

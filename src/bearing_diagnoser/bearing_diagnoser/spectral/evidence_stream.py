@@ -32,6 +32,15 @@ lines keeps the last measurement. Terms two hypotheses could both match at one s
 others before they are tested (explain-away), in the window as in the long horizon.
 
 Only past data enter a decision (causal). A gap in the samples restarts the schedule.
+
+Snapshots (a snapshot sensor's chunks, :mod:`bearing_common.chunk_stream`): the pause before
+one restarts the schedule but not the long horizon, so that evidence accumulates across
+snapshots while the speed holds (the geometry check above, at the snapshot's first window)
+and the condition does (:meth:`EvidenceStream.restart_long`). A snapshot at least one window
+long is scored by the windows it holds, as a stretch of stream; a shorter one by one window
+of its own length, for the hypotheses its resolution separates
+(:func:`.fault_combs.untestable`), the others reported untested; its spectrum enters the long
+horizon at that geometry (a sensor's snapshots are all equally long).
 """
 
 from __future__ import annotations
@@ -60,6 +69,7 @@ from .fault_combs import (
     sidebands_carry,
     stands_out,
     term_frequencies,
+    untestable,
 )
 from .settings import SpectralSettings, check_resolvable
 from .shaft_speed import estimate_speed
@@ -76,7 +86,8 @@ class WindowEvidence:
     told tolerance) or "estimated" (blind), ``told_hz`` the told rate (None: none);
     ``long``: per hypothesis the long horizon's :class:`.accumulation.HorizonEvidence`,
     resting on ``horizon_windows`` windows from sample ``horizon_start`` (empty when the long
-    horizon is off or holds nothing yet).
+    horizon is off or holds nothing yet); ``untested``: {hypothesis: why} the window could not
+    test (a short snapshot: :func:`.fault_combs.untestable`).
     """
 
     start: int
@@ -91,6 +102,7 @@ class WindowEvidence:
     long: dict = field(default_factory=dict)
     horizon_start: int = 0
     horizon_windows: int = 0
+    untested: dict = field(default_factory=dict)
 
 
 class EvidenceStream:
@@ -229,24 +241,31 @@ class EvidenceStream:
             self._long_evidence = {}
 
     # -- samples in, evidence out -------------------------------------------------------
-    def push(self, first_index: int, y) -> list[WindowEvidence]:
-        """Feed samples ``y`` starting at absolute index ``first_index``; return windows that became due."""
+    def push(self, first_index: int, y, snapshot: bool = False) -> list[WindowEvidence]:
+        """Feed samples ``y`` starting at absolute index ``first_index``; return windows that became due.
+        ``snapshot``: a snapshot sensor's chunk (module docstring): the pause before it keeps the
+        long horizon, and a snapshot shorter than one window is scored alone."""
         y = np.asarray(y, dtype=float)
         offset = self._cursor.offset(first_index)
         if offset is not None and offset < 0:  # overlap: keep only new samples
             y = y[-offset:]
             first_index -= offset
-        if offset is None or offset > 0:  # start or gap: a new schedule
+        began = offset is None or offset > 0
+        if began:  # start or gap: a new schedule
             self._samples.clear(first=first_index)
             self._origin = first_index
             self._next_end, self._last_update = None, None
-            if self.long is not None:
+            if self.long is not None and not snapshot:
                 self.long.stop()
         if y.size == 0:
             return []
         self._samples.append(y)
         self._cursor.advance(first_index, y.size)
-        return self._run()
+        out = self._run()
+        if snapshot and began and self.speed is not None and self._samples.end - self._origin < self.window:
+            short = self._snapshot_window()  # (the schedule's geometry is set: a speed is known)
+            out = [short] if short is not None else []
+        return out
 
     def _held(self, i0: int, i1: int) -> np.ndarray:
         """The held samples from index max(i0, oldest held) to i1 (a view)."""
@@ -302,27 +321,7 @@ class EvidenceStream:
             return None if sensor.ok else WindowEvidence(end - self.window, end, {}, self.band, fr, sigma, source,
                                                          sensor)
         spectrum = window_spectrum(x, s.prewhiten)
-        ses, df = band_ses(spectrum, x.size, self.fs, np.array([[self.band.low, self.band.high]]), self.f_top)
-        z = normalise(ses)
-        found = comb_evidence(z, df, fr, self.terms, self.rho, s.mask_shaft, self.band.candidates)
-        evidence = {h: CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
-                    for h, (lp, rho, stat, j) in found.items()}
-        if len(evidence) > 1:  # the others without the strongest one's lines (:mod:`.accumulation`)
-            strongest = min(evidence, key=lambda h: evidence[h].log10p)
-            held = term_frequencies(self.terms, strongest, evidence[strongest].rho, fr)
-            others = {h: self.terms[h] for h in evidence if h != strongest}
-            for h, (lp, rho, stat, j) in comb_evidence(z, df, fr, others, self.rho, s.mask_shaft, self.band.candidates,
-                                                       exclude=held).items():
-                evidence[h] = CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
-        for h, e in evidence.items():  # distinct evidence only (:mod:`.accumulation`)
-            if e.log10p == 0.0:
-                continue
-            distinct = stands_out(z, df, fr, self.terms[h], self.rho, e.log10p - np.log10(self.band.candidates),
-                                  s.mask_shaft)
-            if h == FaultState.BALL:
-                distinct = distinct and sidebands_carry(z, df, fr, self.terms[h], e.rho, s.mask_shaft)
-            if not distinct:
-                evidence[h] = CombEvidence(0.0, e.rho, e.statistic, e.terms)
+        evidence = self._evidence(spectrum, x.size, self.band, self.terms, self.f_top, fr)
         told = self._told[0] if self._told else None
         if self.long is None:
             return WindowEvidence(end - self.window, end, evidence, self.band, fr, sigma, source, sensor, told)
@@ -331,3 +330,65 @@ class EvidenceStream:
         return WindowEvidence(end - self.window, end, evidence, self.band, fr, sigma, source, sensor, told,
                               self._long_evidence, self.long.start or 0, self.long.windows)
 
+    def _evidence(self, spectrum: np.ndarray, n: int, band: BandChoice, terms: dict, f_top: float,
+                  fr: float) -> dict:
+        """{hypothesis: CombEvidence} of one window's spectrum (its rfft, ``n`` samples) in ``band``, for
+        the combs ``terms`` up to ``f_top`` (Hz) at shaft rate ``fr`` (Hz)."""
+        s = self.settings
+        ses, df = band_ses(spectrum, n, self.fs, np.array([[band.low, band.high]]), f_top)
+        z = normalise(ses)
+        found = comb_evidence(z, df, fr, terms, self.rho, s.mask_shaft, band.candidates)
+        evidence = {h: CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
+                    for h, (lp, rho, stat, j) in found.items()}
+        if len(evidence) > 1:  # the others without the strongest one's lines (:mod:`.accumulation`)
+            strongest = min(evidence, key=lambda h: evidence[h].log10p)
+            held = term_frequencies(terms, strongest, evidence[strongest].rho, fr)
+            others = {h: terms[h] for h in evidence if h != strongest}
+            for h, (lp, rho, stat, j) in comb_evidence(z, df, fr, others, self.rho, s.mask_shaft, band.candidates,
+                                                       exclude=held).items():
+                evidence[h] = CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
+        for h, e in evidence.items():  # distinct evidence only (:mod:`.accumulation`)
+            if e.log10p == 0.0:
+                continue
+            distinct = stands_out(z, df, fr, terms[h], self.rho, e.log10p - np.log10(band.candidates),
+                                  s.mask_shaft)
+            if h == FaultState.BALL:
+                distinct = distinct and sidebands_carry(z, df, fr, terms[h], e.rho, s.mask_shaft)
+            if not distinct:
+                evidence[h] = CombEvidence(0.0, e.rho, e.statistic, e.terms)
+        return evidence
+
+    def _snapshot_window(self) -> WindowEvidence | None:
+        """The snapshot held, shorter than one window, as one window of its own length (module
+        docstring); None when no demodulation band could be chosen."""
+        s = self.settings
+        start, end = self._origin, self._samples.end
+        x = self._held(start, end)
+        fr, sigma, source = self.speed
+        told = self._told[0] if self._told else None
+        sensor = check_window(x)
+        untested = untestable(self.terms, fr, self.fs / x.size, s.mask_shaft)
+        terms = {h: t for h, t in self.terms.items() if h not in untested}
+        if not sensor.ok or not terms:
+            return WindowEvidence(start, end, {}, None, fr, sigma, source, sensor, told, untested=untested)
+        f_top = highest_term(terms, self.rho[1]) * fr
+        usable = self.usable_bandwidth or 0.45 * self.fs
+        band = choose_band(x, self.fs, f_top, usable, fr, terms, self.rho, s.prewhiten, s.mask_shaft,
+                           s.band_criterion)
+        if band is None:
+            return None
+        spectrum = window_spectrum(x, s.prewhiten)
+        evidence = self._evidence(spectrum, x.size, band, terms, f_top, fr)
+        if self.long is None:
+            return WindowEvidence(start, end, evidence, band, fr, sigma, source, sensor, told, untested=untested)
+        geometry = CombGeometry(self.fs, fr, sigma, x.size, self.rho, terms, f_top)
+        held = self.long.geometry
+        if held is not None and held.same_bins(geometry) and held.terms.keys() == terms.keys():
+            self.long.retune(geometry)
+        else:
+            self.long.restart(start, geometry, live_bands(np.fft.rfft(x - x.mean()), x.size, self.fs, f_top, usable))
+            self._long_evidence = {}
+        if self.long.add(start, spectrum):
+            self._long_evidence = self.long.evidence()
+        return WindowEvidence(start, end, evidence, band, fr, sigma, source, sensor, told, self._long_evidence,
+                              self.long.start or 0, self.long.windows, untested)

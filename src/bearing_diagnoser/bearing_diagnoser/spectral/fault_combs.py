@@ -94,6 +94,40 @@ def drop_ambiguous(terms: dict, tolerance: float) -> dict:
     return out
 
 
+#: Bins a sideband must lie from its carrier to be told from it: the spacing the analysis window is
+#: designed for (4 cage periods put the cage sideband 4 bins off, twice the Hann main lobe's half-width).
+RESOLVED_BINS = 4.0
+
+#: Bins within which a shaft harmonic masks a term (:func:`comb_evidence`).
+SHAFT_MASK_BINS = 1.5
+
+
+def untestable(terms: dict, fr: float, df: float, mask_shaft: bool = True) -> dict:
+    """{hypothesis: why} for the combs a spectrum of bin width ``df`` (Hz) cannot test at shaft rate ``fr``
+    (Hz): those whose sidebands lie fewer than :data:`RESOLVED_BINS` bins from their carriers (they are
+    what tells the inner race, turning with the shaft, and the ball, travelling with the cage, from the
+    others), and, with the shaft-harmonic mask, those whose every carrier lies within
+    :data:`SHAFT_MASK_BINS` of a shaft harmonic (at the kinematic frequencies). A window of the
+    analysis length (4 cage periods) tests every hypothesis; a short snapshot may not."""
+    out = {}
+    for h, t in terms.items():
+        carriers = t[t[:, 2] == 1, 0] * fr
+        sides = (t[t[:, 2] == 0, 0] + t[t[:, 2] == 0, 1]) * fr
+        if not carriers.size:
+            out[h] = "no carrier term left"
+            continue
+        if sides.size:
+            offset = float(np.min(np.abs(sides[:, None] - carriers[None, :]))) / df
+            if offset < RESOLVED_BINS:
+                out[h] = f"sidebands {offset:.1f} bins from their carriers, {RESOLVED_BINS:g} needed"
+                continue
+        if mask_shaft:
+            order = np.rint(carriers / fr)
+            if np.all((order >= 1) & (np.abs(carriers - order * fr) < SHAFT_MASK_BINS * df)):
+                out[h] = f"every carrier within {SHAFT_MASK_BINS:g} bins of a shaft harmonic"
+    return out
+
+
 def rho_range(u: float, slip_search: bool = True) -> tuple[float, float]:
     """(ρ_lo, ρ_hi) for speed uncertainty ``u`` (relative); ±2u only without the slip search."""
     if not slip_search:

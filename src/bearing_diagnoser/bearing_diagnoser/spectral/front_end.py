@@ -19,6 +19,12 @@ long horizon's length, :mod:`.accumulation`). A state that only the long horizon
 the start of the horizon (``evidence_since``): the onset is when the evidence began, not
 when it became significant.
 
+A snapshot shorter than one window tests only the hypotheses its resolution separates
+(:func:`.fault_combs.untestable`; the others are ``untested`` in its scores, and it is not
+diagnosed when none is left: ``resolution_problem``); its tests pay for its own length in
+the budget above, which counts a window every T/2 and so overstates a snapshot sensor's
+tests an hour: conservative.
+
 A window is not diagnosed while the shaft speed is known only to within more than ±2 %
 (a nameplate speed the 1x line has not confirmed yet): every part's comb then slides over
 several percent and can fit a healthy machine's lines (``speed_problem``).
@@ -61,7 +67,8 @@ class SpectralScores(WindowScores):
     significance alone (``long``: its statistic ÷ threshold) and the posterior (with NORMAL's);
     the window's demodulation band; the shaft rate used (Hz) with its uncertainty, the told
     rate (NaN: none told) and whether the measured one disagrees with it beyond the told
-    tolerance (1) or not (0); the seconds of signal the long horizon rests on."""
+    tolerance (1) or not (0); the seconds of signal the long horizon rests on (snapshots: the
+    seconds they hold, not the pauses between them)."""
 
     rho: dict = field(default_factory=dict)
     long: dict = field(default_factory=dict)
@@ -98,6 +105,9 @@ class SpectralScores(WindowScores):
         out.update({f"{h.label}_posterior": p for h, p in self.posterior.items()})
         return out
 
+    def accumulated(self) -> dict:
+        return dict(self.long)
+
 
 class SpectralFrontEnd:
     """The front end (:class:`bearing_diagnoser.decision.front_end.FrontEnd`) of :class:`.settings.SpectralSettings`.
@@ -127,8 +137,8 @@ class SpectralFrontEnd:
         """Nothing to prepare: the p-value tables are filled by the node's warm-up."""
 
     def push(self, hypothesis: FaultState, first_index: int, y, streams: dict[FaultState, StreamBlocks],
-             expected: set) -> list[WindowVerdict]:
-        out = [self._verdict(w, streams) for w in self.evidence.push(first_index, y)]
+             expected: set, snapshot: bool = False) -> list[WindowVerdict]:
+        out = [self._verdict(w, streams) for w in self.evidence.push(first_index, y, snapshot)]
         for st in streams.values():  # blocks before the evidence's buffer are never needed again
             st.trim(self.evidence.retained_from // st.env.decimation)
         return out
@@ -154,10 +164,15 @@ class SpectralFrontEnd:
                                 speed_sigma_hz=w.speed_sigma,
                                 told_speed_hz=math.nan if w.told_hz is None else w.told_hz,
                                 speed_disagrees=float(w.speed_source == "measured"),
-                                horizon_s=w.horizon_windows * (w.end - w.start) / self.fs)
+                                horizon_s=w.horizon_windows * (w.end - w.start) / self.fs, untested=w.untested)
         _thesis_blocks(scores, streams, w.start, w.end)
         if not w.sensor.ok:
             return WindowVerdict(t0, t1, FaultState.UNKNOWN, 0.0, scores, sensor_problem=w.sensor.problem)
+        if not both:
+            return WindowVerdict(t0, t1, FaultState.UNKNOWN, 0.0, scores, resolution_problem=(
+                f"a {t1 - t0:.3g} s snapshot resolves {self.fs / (w.end - w.start):.3g} Hz, too coarse at "
+                f"{60 * w.speed_hz:.0f} rpm for every hypothesis: "
+                + "; ".join(f"{h.label}: {why}" for h, why in w.untested.items())))
         if w.speed_source == "told" and w.speed_sigma > UNSURE_SPEED * w.speed_hz:
             return WindowVerdict(t0, t1, FaultState.UNKNOWN, 0.0, scores, speed_problem=(
                 f"shaft speed not confirmed: told {60 * w.speed_hz:.0f} rpm "
