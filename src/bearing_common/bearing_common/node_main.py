@@ -16,6 +16,13 @@
   thread on stderr and ends the process with exit code 1 (``StopSignals(stall_s=...)``),
   so the log says where a clean-up or callback hung, before a supervisor escalates to
   SIGKILL at 5 s.
+* Once rclpy is shut down, the objects still alive are frozen (``gc.freeze()``): the
+  interpreter's teardown at exit then skips its full garbage collections over them. A
+  node's heap is mostly what numba, llvmlite and scipy built at start-up (about 160 000
+  tracked objects, 0.15 s per collection); those collections took 0.8-1 s of CPU per node,
+  after the node had already stopped, and four nodes stopping at once on two busy cores
+  ran past the 4 s watchdog (``Timeout``, ``<no Python frame>``, exit 1). Frozen, the
+  teardown takes about 0.1 s of CPU; the memory goes back to the system with the process.
 
 A node with a run loop of its own passes ``run(node, stop)``, which must return soon
 after ``stop`` becomes true (within ``POLL_S``, as the default spin does). Several nodes
@@ -23,6 +30,7 @@ in one process (:func:`run_nodes_main`: the fleet's multi-node processes) share 
 single-threaded executor, and each node's hook is called.
 """
 
+import gc
 import signal
 import sys
 
@@ -93,4 +101,5 @@ def run_nodes_main(program: str, make_nodes, run=None, args=None) -> int:
             for node in nodes:
                 node.destroy_node()
             rclpy.try_shutdown()
+            gc.freeze()  # the process ends: no collection over the start-up heap at exit
     return 0
