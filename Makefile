@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup demo test unit lint fuzz bench accuracy soak clean
+.PHONY: setup full-install demo test unit lint fuzz bench accuracy soak stops clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -12,7 +12,12 @@ setup:
 demo: setup
 	@.venv/bin/bearing-graph --out out/demo
 
-test: setup
+# the real ros2 CLI over the wheels (../shared/ros2-cli) and ros_ws/ built in it as a full ROS 2 install
+# builds it (out/ros2-cli, out/full-install; redone only when inputs change); skipped without ../shared/ros2-cli
+full-install: setup
+	@$(VENV_PY) tools/full_ros_install.py || [ $$? -eq 3 ]
+
+test: setup full-install
 	@$(VENV_PY) -m pytest tests
 
 # the tests without DDS (pure-Python cores, files, CLIs): the fast loop
@@ -39,6 +44,11 @@ accuracy: setup
 SOAK_MINUTES ?= 30
 soak: setup
 	@$(VENV_PY) benchmarks/soak.py --minutes $(SOAK_MINUTES) --out out/soak.md
+
+# Ctrl-C to the starved `ros2 launch` of the monitoring graph, STOPS times (default 20): 0 stalls expected
+STOPS ?= 20
+stops: setup full-install
+	@BEARING_STOPS=$(STOPS) $(VENV_PY) -m pytest tests/ros/test_ros2_cli.py -k starved_monitor -q -s
 
 clean:
 	rm -rf ros_ws/build ros_ws/install ros_ws/log out
