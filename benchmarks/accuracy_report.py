@@ -27,7 +27,7 @@ MANIFEST = ROOT / "benchmarks" / "shared_data.yaml"
 
 
 def _spectral(**changes):
-    return lambda cfg: replace(cfg, spectral=replace(cfg.spectral, **changes))
+    return lambda cfg: replace(cfg, front_end=replace(cfg.front_end, **changes))
 
 
 #: One block changed at a time (the decision's own settings otherwise).

@@ -66,7 +66,7 @@ def _cwru_105() -> pathlib.Path | None:
 
 
 def _diagnose_speed(bag: pathlib.Path, label: str) -> list:
-    from bearing_diagnoser.offline import diagnose_recording
+    from bearing_diagnoser.recording_diagnosis import diagnose_recording
     from bearing_recordings.load import load_recording
     t0 = time.perf_counter()
     rec = load_recording(bag)

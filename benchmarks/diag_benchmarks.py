@@ -23,9 +23,10 @@ import numpy as np
 
 from bearing_common.bearings import CATALOG, fault_frequency
 from bearing_common.states import FaultState
-from bearing_diagnoser.decision import STREAMS, Diagnoser
-from bearing_diagnoser.decision_config import config_for
-from bearing_diagnoser.offline import diagnose_measurement, diagnose_recording
+from bearing_diagnoser.diagnoser import STREAMS, Diagnoser
+from bearing_diagnoser.front_ends import config_for
+from bearing_diagnoser.recording_diagnosis import diagnose_measurement, diagnose_recording
+from bearing_diagnoser.warm_up import warm_up
 from bearing_observer.model_sets import NONE
 from bearing_recordings.recording import Recording
 
@@ -82,9 +83,8 @@ def throughput(duration_s: float = 2.0, model_set: str = "sim_48k", fs: float = 
     y = 0.7 * rng.standard_normal(int(duration_s * fs))
     dg = Diagnoser(config_for(model_set), model_set, BEARING, fs)
     dg.tell_speed(1800.0)
-    dg.thresholds()  # calibration is a one-off, not part of the running cost
-    from bearing_diagnoser import significance
-    significance.warm_up()
+    dg.warm_up()  # calibration is a one-off, not part of the running cost
+    warm_up()
     rows = []
     ff = {h: fault_frequency(BEARING, h, 1800.0) for h in HYPOTHESES}
     chunk = int(0.01 * fs)
@@ -118,15 +118,13 @@ def steady_state_throughput(model_set: str = "sim_48k", fs: float = 48000.0, sec
     thread. Values are the best repeat, the unit gives the range over the repeats; the
     decision alone (its share of the same run) only where observers run.
     """
-    from bearing_diagnoser import kernels, significance
     from bearing_observer.observer import FaultObserver
     rec = record or simulate_case("or", 1800.0, 4.5e-3, segment_s=0.5 * (1.0 + seconds), sample_rate=fs)
     x = rec.accel
     warm = int(fs)
     chunk = int(round(0.01 * fs))
     ff = {h: fault_frequency(BEARING, h, 1800.0) for h in HYPOTHESES}
-    significance.warm_up()
-    kernels.warm_up()
+    warm_up()
     total, decision = [], []
     for _ in range(repeats):
         dg = Diagnoser(config_for(model_set), model_set, BEARING, fs)
@@ -178,7 +176,7 @@ def block_contributions(noise_density: float = 4.5e-3, rpm: float = 1800.0, xcor
         rec = simulate_case(name, rpm, noise_density)
         full = diagnose_recording(rec)
         base = config_for(full.model_set)
-        cfar_cfg = replace(base, fold=replace(base.fold, explain_away=False, explained_margin=10.0))
+        cfar_cfg = replace(base, front_end=replace(base.front_end, explain_away=False, explained_margin=10.0))
         cfar = diagnose_recording(rec, config=cfar_cfg)
         _, nomodel = diagnose_measurement(rec.accel, rec.sample_rate, rpm, full.model_set)
         fs = full.sample_rate
@@ -189,8 +187,8 @@ def block_contributions(noise_density: float = 4.5e-3, rpm: float = 1800.0, xcor
                 continue
             truth = FaultState(int(seg[0]))
             sc = d_full.scores
-            xc = {h: sc.get(f"{h.label}_xcorr", 0.0) for h in HYPOTHESES}
-            ex = {h: sc.get(f"{h.label}_explained", 0.0) for h in HYPOTHESES}
+            xc = {h: sc.xcorr.get(h, 0.0) for h in HYPOTHESES}
+            ex = {h: sc.explained.get(h, 0.0) for h in HYPOTHESES}
             hx = max(xc, key=xc.get)
             he = max(ex, key=ex.get)
             labels = {"thesis xcorr": hx if xc[hx] > xcorr_threshold else N,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from bearing_common.states import FaultState
-from bearing_diagnoser.offline import Segment
+from bearing_diagnoser.decision.segments import Segment
 from bearing_recordings.recording import Recording
 
 N, O, I = FaultState.NORMAL, FaultState.OUTER_RACE, FaultState.INNER_RACE

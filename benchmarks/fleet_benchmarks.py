@@ -222,7 +222,7 @@ class Listener:
 
         from bearing_common import topics
         from bearing_common.node_main import event_executor
-        from bearing_diagnoser.session import status_name
+        from bearing_diagnoser.diagnoser_session import status_name
 
         self.motors = motors
         self.arrivals = {m: ([], []) for m in dict.fromkeys((motors[0], motors[-1]))}  # motor -> (chunk stamps

@@ -31,12 +31,13 @@ sys.path.insert(0, str(ROOT))  # `benchmarks` as a package
 from bearing_common.bearings import Bearing, fault_frequency, load_bearing  # noqa: E402
 from bearing_common.states import FaultState  # noqa: E402
 from bearing_diagnoser.accuracy import load_manifest  # noqa: E402
-from bearing_diagnoser.decision_config import config_for, envelope_baseline  # noqa: E402
-from bearing_diagnoser.envelope_spectrum import band_ses, normalise, window_spectrum  # noqa: E402
-from bearing_diagnoser.fault_lines import HYPOTHESES, N_HARMONICS, comb_evidence, comb_terms  # noqa: E402
-from bearing_diagnoser.offline import choose_model_set  # noqa: E402
-from bearing_diagnoser.spectral_engine import SpectralEngine, SpectralSettings, WindowEvidence  # noqa: E402
-from bearing_diagnoser.spectral_labels import label_window, significance_level  # noqa: E402
+from bearing_diagnoser.front_ends import config_for, envelope_baseline  # noqa: E402
+from bearing_diagnoser.pipeline import choose_model_set  # noqa: E402
+from bearing_diagnoser.spectral.envelope_spectrum import band_ses, normalise, window_spectrum  # noqa: E402
+from bearing_diagnoser.spectral.evidence_stream import EvidenceStream, WindowEvidence  # noqa: E402
+from bearing_diagnoser.spectral.fault_combs import HYPOTHESES, N_HARMONICS, comb_evidence, comb_terms  # noqa: E402
+from bearing_diagnoser.spectral.settings import SpectralSettings  # noqa: E402
+from bearing_diagnoser.spectral.window_label import label_window, significance_level  # noqa: E402
 from bearing_sim.model_parameters import DRIVE_END  # noqa: E402
 from bearing_sim.schedule import scenario  # noqa: E402
 from bearing_sim.simulator import SimulationConfig, simulate  # noqa: E402
@@ -123,7 +124,7 @@ def window_view(name: str, x: np.ndarray, fs: float, bearing: Bearing, rpm: floa
     (default its own highest tested line), and checked to give the engine's evidence.
     """
     def run(end: int):
-        engine = SpectralEngine(fs, bearing, settings)
+        engine = EvidenceStream(fs, bearing, settings)
         engine.tell_speed(rpm / 60.0)
         return engine, engine.push(0, x[:end])
 
@@ -209,12 +210,12 @@ def real_machine_figures(out: pathlib.Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     rec = entry.load()
     bearing = load_bearing(entry.bearing)
-    config = config_for(choose_model_set(rec, bearing).name)
+    config = config_for(choose_model_set(rec.source, rec.sample_rate, bearing).name)
     f_max = (N_HARMONICS * bearing.orders().bpfi + 1.5) * rec.rpm / 60.0  # Hz: 3·BPFI and its upper sideband
     ours = window_view("our decision (prewhitened, band chosen by the fault evidence)", rec.accel, rec.sample_rate,
-                       bearing, rec.rpm, config.spectral, WINDOW_AT_S, f_max)
+                       bearing, rec.rpm, config.front_end, WINDOW_AT_S, f_max)
     baseline = window_view("textbook baseline (no prewhitening, kurtogram band, fundamentals only)", rec.accel,
-                           rec.sample_rate, bearing, rec.rpm, envelope_baseline(config).spectral, WINDOW_AT_S, f_max)
+                           rec.sample_rate, bearing, rec.rpm, envelope_baseline(config).front_end, WINDOW_AT_S, f_max)
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(11, 8.5))
     for ax, view in zip(axes, (ours, baseline)):
         spectrum_panel(ax, view, bearing, config.pfa, rec.sample_rate, f_max)

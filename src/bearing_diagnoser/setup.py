@@ -5,7 +5,7 @@ PACKAGE = "bearing_diagnoser"
 setup(
     name=PACKAGE,
     version="0.1.0",
-    packages=[PACKAGE],
+    packages=[PACKAGE, f"{PACKAGE}.decision", f"{PACKAGE}.spectral", f"{PACKAGE}.fold"],
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
         ("share/" + PACKAGE, ["package.xml"]),

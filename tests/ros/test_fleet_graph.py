@@ -27,7 +27,7 @@ from ros_harness import RosGraph, session_domain_id
 
 from bearing_common import topics
 from bearing_common.states import FaultState
-from bearing_diagnoser.session import status_name
+from bearing_diagnoser.diagnoser_session import status_name
 
 pytestmark = pytest.mark.ros
 

@@ -5,6 +5,10 @@
   string literal and no ``QoSProfile(...)`` anywhere else.
 * The observer and diagnoser packages import nothing from ``bearing_sim``, so they run on a
   machine without the simulator (tested for real in ``test_runs_without_bearing_sim``).
+* The diagnoser by front end: its decision core imports neither front end, the front ends
+  import each other not, one module picks between them (and names them: no comparison with
+  "spectral" or "fold" anywhere else), and the diagnoser reaches into the observer package
+  only where it runs the observers' sessions offline (:mod:`bearing_diagnoser.pipeline`).
 """
 
 from __future__ import annotations
@@ -103,7 +107,7 @@ def cycles(graph: dict) -> list:
 
 def test_the_import_graph_is_found():
     graph = import_graph()
-    assert "bearing_diagnoser.decision" in graph and "bearing_common.topics" in graph
+    assert "bearing_diagnoser.diagnoser" in graph and "bearing_common.topics" in graph
     assert "bearing_common.states" in graph["bearing_common.topics"]
 
 
@@ -182,6 +186,53 @@ def test_observer_and_diagnoser_import_nothing_from_the_simulator():
             assert not any(d.startswith("bearing_sim") for d in deps), module
         if module.startswith("bearing_observer") and module != "bearing_observer.identify_cli":
             assert not any(d.startswith("bearing_sim") for d in deps), module
+
+
+#: Where the diagnoser may use the observer package, and what of it: the offline pipeline runs the
+#: observers' sessions and picks a recording's model set with the registry's rule.
+OBSERVER_USES = {"bearing_diagnoser.pipeline": {"bearing_observer.observer_session", "bearing_observer.model_sets"}}
+
+
+def test_the_diagnoser_uses_the_observer_package_only_to_run_its_sessions():
+    for module, deps in import_graph().items():
+        if module.startswith("bearing_diagnoser"):
+            used = {d for d in deps if d.split(".")[0] == "bearing_observer"}
+            assert used <= OBSERVER_USES.get(module, set()), f"{module} imports {sorted(used)}"
+
+
+def test_the_decision_core_and_the_front_ends_depend_one_way():
+    """decision (core) <- spectral, fold (each on its own) <- front_ends, the one place naming both."""
+    graph = import_graph()
+    below = {"bearing_diagnoser.decision": {"bearing_diagnoser.decision"},
+             "bearing_diagnoser.spectral": {"bearing_diagnoser.decision", "bearing_diagnoser.spectral"},
+             "bearing_diagnoser.fold": {"bearing_diagnoser.decision", "bearing_diagnoser.fold"}}
+    for module, deps in graph.items():
+        for package, allowed in below.items():
+            if module.startswith(package + "."):
+                own = {".".join(d.split(".")[:2]) for d in deps if d.startswith("bearing_diagnoser.")}
+                assert own <= allowed, f"{module} imports {sorted(own - allowed)}"
+    pickers = {m for m, deps in graph.items()
+               if any(d.startswith("bearing_diagnoser.spectral") for d in deps)
+               and any(d.startswith("bearing_diagnoser.fold") for d in deps)}
+    assert pickers <= {"bearing_diagnoser.front_ends", "bearing_diagnoser.warm_up"}, pickers
+
+
+def front_end_name_comparisons(path: pathlib.Path) -> list:
+    """Comparisons with the front ends' names ("spectral", "fold") in ``path``."""
+    tree = ast.parse(path.read_text(), str(path))
+    return [f"{path.relative_to(ROOT)}:{n.lineno}" for n in ast.walk(tree) if isinstance(n, ast.Compare)
+            and any(isinstance(c, ast.Constant) and c.value in ("spectral", "fold") for c in [n.left, *n.comparators])]
+
+
+def test_no_branch_on_the_front_end_outside_the_place_that_picks_it():
+    package = ROOT / "src" / "bearing_diagnoser" / "bearing_diagnoser"
+    assert [o for p in source_files([package]) for o in front_end_name_comparisons(p)] == []
+    probe = package / "_branch_probe.py"
+    try:
+        probe.write_text('if config.method == "fold":\n    pass\n')
+        assert len(front_end_name_comparisons(probe)) == 1
+    finally:
+        probe.unlink()
 
 
 HIDE_SIM = """

@@ -14,16 +14,15 @@ from numpy.testing import assert_allclose
 
 from bearing_common.bearings import CATALOG, fault_frequency
 from bearing_common.states import FaultState
-from bearing_diagnoser.bearing_lines import bearing_lines, decoy_frequencies
-from bearing_diagnoser.calibration import calibrate
-from bearing_diagnoser.decision import Diagnoser, config_for
-from bearing_diagnoser.offline import diagnose_measurement, segments_from_decisions
-from bearing_diagnoser.periodicity import (
-    EnergyEnvelope,
-    folded_peakiness,
-    train_autocorrelation,
-    train_cross_correlation,
-)
+from bearing_diagnoser.decision.segments import segments_from_decisions
+from bearing_diagnoser.decision.stream_blocks import EnergyEnvelope
+from bearing_diagnoser.decision.thesis_blocks import train_autocorrelation, train_cross_correlation
+from bearing_diagnoser.diagnoser import Diagnoser
+from bearing_diagnoser.fold.calibration import calibrate
+from bearing_diagnoser.fold.decoys import bearing_lines, decoy_frequencies
+from bearing_diagnoser.fold.folding import folded_peakiness
+from bearing_diagnoser.front_ends import config_for
+from bearing_diagnoser.recording_diagnosis import diagnose_measurement
 from bearing_diagnoser.synthetic import burst_train, white_noise
 
 FS = 48000.0
@@ -85,11 +84,11 @@ def test_energy_envelope_is_chunk_invariant():
 
 def test_thresholds_are_derived_from_the_stated_false_alarm_rate():
     cfg = config_for("sim_48k")
-    loose = calibrate(cfg.fold, 1e-2, FS, BEARING)
-    strict = calibrate(cfg.fold, cfg.pfa, FS, BEARING)
+    loose = calibrate(cfg.front_end, 1e-2, FS, BEARING)
+    strict = calibrate(cfg.front_end, cfg.pfa, FS, BEARING)
     assert 0.8 < strict.cfar_median < 1.2  # CFAR statistic ≈ 1 on noise
     assert 1.0 < loose.threshold < strict.threshold < 5.0
-    assert strict == calibrate(replace(cfg.fold), cfg.pfa, FS, BEARING)  # deterministic
+    assert strict == calibrate(replace(cfg.front_end), cfg.pfa, FS, BEARING)  # deterministic
 
 
 # ---------------------------------------------------------------------------------------
@@ -161,7 +160,8 @@ def test_incremental_update_with_one_stream_lagging():
 
 def test_missing_stream_is_decided_without_after_max_lag():
     y = burst_train(2.0, FS, BPFO, amplitude=10.0) + noise(2.0)
-    dg = Diagnoser(config_for("sim_48k", max_lag_s=0.5))
+    cfg = config_for("sim_48k")
+    dg = Diagnoser(replace(cfg, front_end=replace(cfg.front_end, max_lag_s=0.5)))
     out = []
     for i in range(0, y.size, 480):
         out += dg.update(O, i, FS, y[i:i + 480], None, None, BPFO)
@@ -200,8 +200,8 @@ def test_model_explains_separates_the_model_from_injected_impulses():
         out += dg.update(I, i, FS, y[s], np.zeros(y[s].size), np.zeros(y[s].size), BPFI)
     out += dg.flush()
     assert all(d.state == N for d in out)
-    assert max(d.scores["outer_race_explained"] for d in out) < 0.0
-    assert np.median([d.scores["outer_race_xcorr"] for d in out]) > 0.05
+    assert max(d.scores.explained[O] for d in out) < 0.0
+    assert np.median([d.scores.xcorr[O] for d in out]) > 0.05
 
 
 def test_segments_are_maximal_runs_with_contiguous_times():

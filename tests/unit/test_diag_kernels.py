@@ -1,6 +1,6 @@
 """Compiled kernels of the decision against the NumPy / SciPy formulations they replace, bit for bit.
 
-Each kernel (bearing_diagnoser.kernels) promises the exact result of a NumPy expression
+Each kernel (compiled with numba, next to the algorithm it serves) promises the exact result of a NumPy expression
 (summation order included), so that the decisions did not change when they replaced it.
 The references below are those expressions, as the decision computed them before.
 """
@@ -13,17 +13,21 @@ from numpy.testing import assert_allclose, assert_array_equal
 from scipy import signal, sparse
 
 from bearing_common.bearings import CATALOG, fault_frequency
-from bearing_diagnoser import kernels
-from bearing_diagnoser.decision import STREAMS, Diagnoser, config_for
-from bearing_diagnoser.periodicity import (
-    EnergyEnvelope,
+from bearing_diagnoser import decision, fold
+from bearing_diagnoser.decision.pairwise_sum import row_sum
+from bearing_diagnoser.decision.stream_blocks import EnergyEnvelope, block_sums, sos_filter
+from bearing_diagnoser.decision.thesis_blocks import train_correlation
+from bearing_diagnoser.diagnoser import STREAMS, Diagnoser
+from bearing_diagnoser.fold.folding import (
     cfar_periodicity,
     explain_away,
     folded_peakiness,
     impact_phase_mask,
     period_grid,
-    train_correlation,
 )
+from bearing_diagnoser.fold.scoring import window_sums
+from bearing_diagnoser.front_ends import config_for
+from bearing_diagnoser.warm_up import warm_up
 
 FE = 4000.0  # Hz, envelope rate
 RNG = np.random.default_rng(20150101)
@@ -57,7 +61,7 @@ def reference_peakiness(env, freqs, bins=16, smooth=2):
 def test_row_sum_is_numpys_pairwise_sum():
     for n in [*range(0, 300), 511, 1000, 1025, 4096, 12345]:
         a = RNG.standard_normal((2, n + 3)) * 10.0 ** RNG.uniform(-5, 5, (2, n + 3))
-        assert kernels.row_sum(a, 1, 2, n) == a[1, 2:2 + n].sum(), n
+        assert row_sum(a, 1, 2, n) == a[1, 2:2 + n].sum(), n
 
 
 def test_band_pass_is_sosfilt_chunk_by_chunk():
@@ -66,7 +70,7 @@ def test_band_pass_is_sosfilt_chunk_by_chunk():
     want, _ = signal.sosfilt(sos, x, zi=np.zeros((sos.shape[0], 2)))
     zi, got = np.zeros((sos.shape[0], 2)), np.empty_like(x)
     for i in range(0, x.size, 333):
-        kernels.sos_filter(sos, zi, x[i:i + 333], got[i:i + 333])
+        sos_filter(sos, zi, x[i:i + 333], got[i:i + 333])
     assert_array_equal(got, want)
 
 
@@ -75,7 +79,7 @@ def test_block_sums_are_the_reshaped_sums_and_means(d):
     y, r, b = RNG.standard_normal((3, 40 * d))
     u = (RNG.random(40 * d) < 0.01) * 1.0
     out = np.empty((7, 40))
-    kernels.block_sums(y, r, u, b, d, out)
+    block_sums(y, r, u, b, d, out)
     blocks = {k: a.reshape(-1, d) for k, a in {"y": y, "r": r, "u": u, "b": b}.items()}
     b2 = blocks["b"] ** 2
     want = [b2.mean(axis=1), (b2 * b2).mean(axis=1), blocks["y"].sum(axis=1), (blocks["y"] ** 2).sum(axis=1),
@@ -138,17 +142,17 @@ def test_train_correlation_is_the_lagged_pearson_correlation():
 def test_window_sums_are_numpys_sums():
     w, q = 200, 50
     env, b4, y, y2, r2 = RNG.exponential(size=(5, w))
-    got = kernels.window_sums(env, b4, y, y2, r2, q)
+    got = window_sums(env, b4, y, y2, r2, q)
     assert got == (y.sum(), y2.sum(), r2.sum(), env.sum(), env[:-q].sum(), env[-q:].sum(), b4.sum())
-    assert kernels.window_sums(env, b4, y, y2, r2, w + 1)[4:6] == (0.0, env.sum())
+    assert window_sums(env, b4, y, y2, r2, w + 1)[4:6] == (0.0, env.sum())
 
 
 def test_warm_up_compiles_every_signature_the_decision_uses():
     """The diagnoser node calls warm_up() before subscribing: afterwards, deciding must compile
     nothing more (a compile stalls it for a second or more)."""
-    kernels.warm_up()
-    names = [n for n in dir(kernels) if hasattr(getattr(kernels, n), "signatures")]
-    before = {n: len(getattr(kernels, n).signatures) for n in names}
+    warm_up()
+    kernels = compiled_kernels()
+    before = {n: len(k.signatures) for n, k in kernels.items()}
     bearing = CATALOG["6205"]
     for model_set, fs in (("sim_48k", 48000.0), ("cwru_de_6205", 12000.0)):
         dg = Diagnoser(config_for(model_set), model_set, bearing, fs)
@@ -160,5 +164,19 @@ def test_warm_up_compiles_every_signature_the_decision_uses():
                 part = y[i:i + chunk]
                 dg.update(h, i, fs, part, 0.1 * part, (RNG.random(part.size) < 0.01) * 1.0,
                           fault_frequency(bearing, h, 1800.0))
-    assert {n: len(getattr(kernels, n).signatures) for n in names} == before
-    assert dg.history, "no window was decided"
+        assert dg.history, "no window was decided"
+    assert {n: len(k.signatures) for n, k in kernels.items()} == before
+
+
+def compiled_kernels() -> dict:
+    """Every compiled kernel of the decision's modules, by qualified name."""
+    import importlib
+    import pkgutil
+    found = {}
+    for package in (decision, fold):
+        for info in pkgutil.iter_modules(package.__path__, package.__name__ + "."):
+            module = importlib.import_module(info.name)
+            found.update({f"{info.name}.{n}": k for n, k in vars(module).items()
+                          if hasattr(k, "signatures") and getattr(k, "__module__", "") == info.name})
+    assert len(found) >= 12, found  # the pairwise sums, block sums, folds, window sums, correlation
+    return found

@@ -14,8 +14,8 @@ import functools
 import numpy as np
 import pytest
 
-from bearing_common.states import FaultState
-from bearing_diagnoser.offline import diagnose_recording
+from bearing_common.states import FaultState, parse_fault
+from bearing_diagnoser.recording_diagnosis import diagnose_recording
 from bearing_recordings.recording import Recording
 from bearing_sim.simulator import SimulationConfig, simulate
 from benchmarks.evaluation import score_case, simulate_case
@@ -74,7 +74,7 @@ def test_model_explains_the_matching_fault_only():
     res, _ = _run("or-ir", 1800.0, NOISE)
 
     def median_e(h, a, b):
-        return np.median([d.scores[f"{h}_explained"] for d in res.decisions
+        return np.median([d.scores.explained[parse_fault(h)] for d in res.decisions
                           if d.window_start >= a + 0.1 and d.window_end <= b])
 
     assert median_e("outer_race", 0.0, 0.2) > 0.5 > median_e("inner_race", 0.0, 0.2) + 0.3

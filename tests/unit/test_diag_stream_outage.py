@@ -5,8 +5,8 @@ import numpy as np
 
 from bearing_common.bearings import CATALOG, fault_frequency
 from bearing_common.states import FaultState
-from bearing_diagnoser.decision import Diagnoser
-from bearing_diagnoser.decision_config import config_for
+from bearing_diagnoser.diagnoser import Diagnoser
+from bearing_diagnoser.front_ends import config_for
 from bearing_diagnoser.synthetic import burst_train, white_noise
 
 FS = 48000.0

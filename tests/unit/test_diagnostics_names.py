@@ -11,7 +11,7 @@ import socket
 import yaml
 
 from bearing_bringup.graph import config_path
-from bearing_diagnoser.session import motor_name, status_name
+from bearing_diagnoser.diagnoser_session import motor_name, status_name
 
 AGGREGATOR_YAML = "diagnostic_aggregator.yaml"
 

@@ -3,7 +3,7 @@
 import pytest
 import yaml
 
-from bearing_bringup import nodes_main
+from bearing_bringup import multi_node_process
 from bearing_bringup.fleet import FleetError, default_fleet_file, load_fleet, parameters_file, processes
 from bearing_bringup.graph import GRAPH, config_path, single_graph
 from bearing_common import topics
@@ -127,14 +127,14 @@ def test_single_node_processes_name_and_place_their_node():
 
 
 def test_multi_node_processes_take_only_fully_qualified_names_of_shareable_nodes():
-    assert nodes_main.split_name("/motor_3/diagnoser") == ("/motor_3", "diagnoser")
-    assert nodes_main.split_name("/plant/m/or_observer") == ("/plant/m", "or_observer")
-    assert nodes_main.split_name("/ir_observer") == ("/", "ir_observer")
+    assert multi_node_process.split_name("/motor_3/diagnoser") == ("/motor_3", "diagnoser")
+    assert multi_node_process.split_name("/plant/m/or_observer") == ("/plant/m", "or_observer")
+    assert multi_node_process.split_name("/ir_observer") == ("/", "ir_observer")
     for bad in ("motor_3/diagnoser", "/motor_3/simulator", "/motor_3/fleet"):
         with pytest.raises(ValueError, match="not a fully qualified name of one of the nodes"):
-            nodes_main.split_name(bad)
+            multi_node_process.split_name(bad)
     with pytest.raises(ValueError, match="no nodes named"):
-        nodes_main.make_nodes([])
+        multi_node_process.make_nodes([])
 
 
 @pytest.mark.parametrize("layout", ["role", "motor", "node"])

@@ -1,6 +1,6 @@
 """Bad input tried systematically (property-based, hypothesis): message callbacks and file loaders.
 
-* the diagnoser's residual callback (:class:`bearing_diagnoser.session.DiagnoserSession`, what the
+* the diagnoser's residual callback (:class:`bearing_diagnoser.diagnoser_session.DiagnoserSession`, what the
   node calls for every message) with chunks of random size (empty to huge), NaN/inf samples,
   zero/negative/absurd sample rates, stamps backwards and far in the future, unknown model sets
   and arrays of unequal length: nothing raises, nothing non-finite is published, every
@@ -31,10 +31,10 @@ from bearing_fleet.fleet_table import FleetTable
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bearing_common.bearings import BearingError, load_bearing
+from bearing_common.bearings import CATALOG, BearingError, load_bearing
 from bearing_common.states import FaultState
 from bearing_diagnoser.diagnoser_node_config import PARAMETERS
-from bearing_diagnoser.session import DiagnoserSession
+from bearing_diagnoser.diagnoser_session import DiagnoserSession
 from bearing_diagnoser.synthetic import burst_train, white_noise
 from bearing_observer.observer_session import ObserverSession
 from bearing_recordings.load import load_recording
@@ -51,7 +51,7 @@ rates = st.one_of(st.sampled_from([0.0, -12000.0, math.nan, math.inf, 1e-9, 1e12
 
 def new_session():
     logged = []
-    values = {p.name: p.default for p in PARAMETERS} | {"rpm": 1797.0}
+    values = {p.name: p.default for p in PARAMETERS} | {"rpm": 1797.0, "rpm_tolerance": 0.02}
     return DiagnoserSession(values, lambda level, text: logged.append((level, text))), logged
 
 
@@ -117,7 +117,7 @@ def test_shaft_speed_callback_takes_any_float(rad_s):
     session, _ = new_session()
     session.on_speed(rad_s)
     assert session.shaft_rpm is None or (math.isfinite(session.shaft_rpm) and session.shaft_rpm > 0)
-    observer = ObserverSession(O, "6205", rpm=1797.0)
+    observer = ObserverSession(O, CATALOG["6205"], rpm=1797.0)
     observer.on_speed(rad_s)
     assert math.isfinite(observer.rpm) and observer.rpm > 0
 
@@ -136,7 +136,7 @@ vibration_chunk = st.fixed_dictionaries({
 @given(st.lists(vibration_chunk, min_size=1, max_size=6), st.sampled_from([O, I]))
 def test_vibration_callback_survives_anything_and_keeps_serving(chunks, fault):
     logged = []
-    session = ObserverSession(fault, "6205", rpm=1797.0, log=lambda level, text: logged.append((level, text)))
+    session = ObserverSession(fault, CATALOG["6205"], rpm=1797.0, log=lambda level, text: logged.append((level, text)))
     rng = np.random.default_rng(0)
     for c in chunks:
         x, _, _ = _arrays(dict(c, ragged=False), rng)

@@ -5,6 +5,7 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy import signal
 
+from bearing_common.bearings import CATALOG
 from bearing_common.states import FaultState
 from bearing_observer.fault_identification import estimate_fault_phase, identify_fault_model
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
@@ -92,7 +93,7 @@ def sim_data():
 
 @pytest.mark.parametrize("fault", ["outer_race", "inner_race"])
 def test_simulator_models_fit_at_least_70_percent(sim_data, fault):
-    r = identify_fault_model(sim_data[fault], FS, 1800.0, fault, "6205", refine_frequency=False)
+    r = identify_fault_model(sim_data[fault], FS, 1800.0, fault, CATALOG["6205"], refine_frequency=False)
     fit = r.model.fit
     assert fit.identification >= 70.0
     assert fit.held_back >= 70.0, fit
@@ -110,7 +111,7 @@ def test_cwru_outer_race_identification(cwru_record):
     rec = load_mat(cwru_record("130_OR007at6_0hp_DE12k.mat"), 12000.0)
     y, rpm = rec.accel, rec.rpm
     assert rec.channel == "X130_DE_time" and rpm == 1796.0
-    r = identify_fault_model(y[:12000], 12000.0, rpm, "outer_race", "6205")
+    r = identify_fault_model(y[:12000], 12000.0, rpm, "outer_race", CATALOG["6205"])
     # slip: measured BPFO within 1 % above/below the kinematic value, and not equal to it
     assert abs(r.preprocessing.fault_frequency / r.preprocessing.kinematic_frequency - 1) < 0.01
     assert r.model.fit.identification >= 70.0

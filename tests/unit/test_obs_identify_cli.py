@@ -94,7 +94,8 @@ def test_identifies_a_set_on_each_rig_that_the_observer_runs(tmp_path, capsys, s
     # the fresh set in the observer: phase estimates every 0.05 s over 1.5 s of the OR record,
     # referred to the record start, stay put (resultant length 1 = locked)
     rec = load_recording(outer, **({"sample_rate": 51200.0, "rpm": 900.0} if rig == "hit-sm" else {}))
-    obs = FaultObserver.from_model_set(str(tmp_path / "mine"), "outer_race", rec.rpm, rec.sample_rate, bearing=bearing)
+    obs = FaultObserver.from_model_set(str(tmp_path / "mine"), "outer_race", rec.rpm, rec.sample_rate,
+                                       bearing=CATALOG[bearing])
     step = int(0.05 * rec.sample_rate)
     phases = []
     for i in range(0, int(1.5 * rec.sample_rate), step):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from bearing_common.bearings import CATALOG, bearing_spec
+from bearing_common.bearings import CATALOG, load_bearing
 from bearing_common.states import FaultState
 from bearing_observer.hw_model import ModelFileError
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
@@ -40,18 +40,18 @@ def test_shipped_sets_match_their_registry_entries():
 
 
 @pytest.mark.parametrize("source, rate, bearing, resample, expected", [
-    ("simulator", 48000, "6205", False, "sim_48k"),
-    ("simulator", 12000, "6205", False, "sim_12k"),
+    ("simulator", 48000, CATALOG["6205"], False, "sim_48k"),
+    ("simulator", 12000, CATALOG["6205"], False, "sim_12k"),
     ("cwru", 12000, None, False, "cwru_de_6205"),       # None: the default bearing, 6205
-    ("CWRU", 12000, "9,0.3126in,1.537in,0deg", False, "cwru_de_6205"),  # same orders, other name
-    ("cwru", 48000, "6205", False, NONE),               # no set at that rate: none ...
-    ("cwru", 48000, "6205", True, "cwru_de_6205"),      # ... unless the caller resamples
-    ("simulator", 24000, "6205", True, "sim_48k"),      # lowest rate at or above the input's
-    ("simulator", 8000, "6205", True, "sim_12k"),
-    ("simulator", 96000, "6205", True, "sim_48k"),      # else the highest
-    ("cwru", 12000, "6203", True, NONE),                # another bearing
-    ("mfpt", 48828, "mfpt", True, NONE),
-    ("mat", 51200, "6205", True, NONE),                 # HIT-SM, any user's sensor
+    ("CWRU", 12000, load_bearing("9,0.3126in,1.537in,0deg"), False, "cwru_de_6205"),  # same orders, other name
+    ("cwru", 48000, CATALOG["6205"], False, NONE),               # no set at that rate: none ...
+    ("cwru", 48000, CATALOG["6205"], True, "cwru_de_6205"),      # ... unless the caller resamples
+    ("simulator", 24000, CATALOG["6205"], True, "sim_48k"),      # lowest rate at or above the input's
+    ("simulator", 8000, CATALOG["6205"], True, "sim_12k"),
+    ("simulator", 96000, CATALOG["6205"], True, "sim_48k"),      # else the highest
+    ("cwru", 12000, CATALOG["6203"], True, NONE),                # another bearing
+    ("mfpt", 48828, CATALOG["mfpt"], True, NONE),
+    ("mat", 51200, CATALOG["6205"], True, NONE),                 # HIT-SM, any user's sensor
 ])
 def test_which_set_for_source_rate_and_bearing(source, rate, bearing, resample, expected):
     assert choose_model_set(source, rate, bearing, resample=resample).name == expected
@@ -75,7 +75,7 @@ def test_observer_of_the_sets_bearing_keeps_the_measured_order():
     m = load_model_set("cwru_de_6205", 12000.0)["outer_race"]
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        for bearing in (None, "6205", B6205, bearing_spec(B6205)):
+        for bearing in (None, B6205):
             obs = FaultObserver(m, rpm=1797.0, bearing=bearing)
             assert obs.fault_order == m.fault_order  # slip measured on record 130, not the kinematic 3.5848
     assert m.fault_order != pytest.approx(B6205.orders().bpfo, rel=1e-4)
@@ -84,7 +84,7 @@ def test_observer_of_the_sets_bearing_keeps_the_measured_order():
 @pytest.mark.parametrize("fault", ["outer_race", "inner_race"])
 def test_observer_of_another_bearing_warns_and_uses_that_bearings_frequency(fault):
     with pytest.warns(BearingMismatchWarning, match=r"cwru_de_6205 .* identified for SKF 6205.*not SKF 6203"):
-        obs = FaultObserver.from_model_set("cwru_de_6205", fault, 1800.0, 12000.0, bearing="6203")
+        obs = FaultObserver.from_model_set("cwru_de_6205", fault, 1800.0, 12000.0, bearing=CATALOG["6203"])
     assert obs.bearing == B6203
     assert obs.fault_frequency == pytest.approx(B6203.frequencies(1800.0).of(FaultState[fault.upper()]), rel=1e-12)
     out = obs.process(np.zeros(1200))  # and it runs
@@ -105,7 +105,7 @@ def test_none_passes_the_measurement_and_locks_the_train(fault, bearing, fs):
     b = CATALOG[bearing]
     freq = b.frequencies(rpm).of(FaultState[fault.upper()])
     y = _bursts(fs, freq, 1.3, int(0.5 * fs))
-    obs = FaultObserver.from_model_set(NONE, fault, rpm, fs, bearing=bearing)
+    obs = FaultObserver.from_model_set(NONE, fault, rpm, fs, bearing=b)
     assert obs.drive_mode == "phase" and obs.fault_frequency == pytest.approx(freq, rel=1e-12)
     parts = [obs.process(c) for c in np.array_split(y, 37)]
     res = np.concatenate([p.residual for p in parts])
@@ -113,7 +113,7 @@ def test_none_passes_the_measurement_and_locks_the_train(fault, bearing, fs):
     assert not any(p.estimate.any() or p.drive.any() for p in parts)  # estimate = 0
     # chunking does not matter
     train = np.concatenate([p.impulse_train for p in parts])
-    whole = FaultObserver.from_model_set(NONE, fault, rpm, fs, bearing=bearing).process(y)
+    whole = FaultObserver.from_model_set(NONE, fault, rpm, fs, bearing=b).process(y)
     assert_allclose(whole.impulse_train, train, rtol=0, atol=1e-9)
     # after the first update the train's pulses sit on the bursts' energy (within 0.2 ms)
     err = np.angle(np.exp(1j * (obs.phase - (1.3 + TWO_PI * freq * y.size / fs)))) / TWO_PI / freq

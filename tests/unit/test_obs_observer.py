@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from bearing_common.bearings import CATALOG
 from bearing_common.states import FaultState
 from bearing_observer.fault_identification import identify_fault_model
 from bearing_observer.impulse_trains import TWO_PI, impulse_train
@@ -187,7 +188,7 @@ def test_or_and_ir_observers_discriminate_on_simulator(sim48, sim_data):
 @pytest.mark.parametrize("fault", ["outer_race", "inner_race"])
 def test_phase_recovered_on_simulator(sim48, sim_data, fault):
     y = sim_data[fault]
-    ident = identify_fault_model(y, FS, 1800.0, fault, "6205", refine_frequency=False)
+    ident = identify_fault_model(y, FS, 1800.0, fault, CATALOG["6205"], refine_frequency=False)
     obs = FaultObserver(sim48[fault])
     obs.process(y)
     # obs.phase refers to the next sample; advance the identified phase to the same time

@@ -30,7 +30,7 @@ class Session(ObserverSession):
 
     def __init__(self, **kwargs):
         self.lines = []
-        kwargs.setdefault("bearing", "6205")
+        kwargs.setdefault("bearing", CATALOG["6205"])
         kwargs.setdefault("log_period", 0.0)
         super().__init__(OR, log=lambda level, text: self.lines.append((level, text)), **kwargs)
 

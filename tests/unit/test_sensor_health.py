@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bearing_common.units import STANDARD_GRAVITY as G
-from bearing_diagnoser.sensor_health import MAX_CLIPPED, MIN_LEVELS, check_window
+from bearing_diagnoser.decision.sensor_health import MAX_CLIPPED, MIN_LEVELS, check_window
 from bearing_diagnoser.synthetic import burst_train, white_noise
 
 FS = 12000.0

@@ -5,7 +5,7 @@ approximate and bearings slip 1-2 %; the decision must stay correct when told th
 import pytest
 
 from bearing_common.states import FaultState
-from bearing_diagnoser.offline import diagnose_recording
+from bearing_diagnoser.recording_diagnosis import diagnose_recording
 from bearing_recordings.load import load_recording
 from benchmarks.evaluation import score_case, simulate_case
 

@@ -17,12 +17,11 @@ import numpy as np
 from numba.core.registry import CPUDispatcher
 from bearing_common.bearings import CATALOG
 from bearing_common.states import FaultState
-from bearing_diagnoser import kernels, significance
-from bearing_diagnoser.decision import Diagnoser
-from bearing_diagnoser.decision_config import config_for
+from bearing_diagnoser.diagnoser import Diagnoser
+from bearing_diagnoser.warm_up import warm_up as warm_up_decision
+from bearing_diagnoser.front_ends import config_for
 from bearing_diagnoser.synthetic import burst_train, white_noise
-from bearing_observer.kernels import warm_up
-from bearing_observer.observer import FaultObserver
+from bearing_observer.observer import FaultObserver, warm_up
 
 def signatures():
     seen = {}
@@ -34,8 +33,7 @@ def signatures():
     return seen
 
 warm_up()  # what the observer node runs before subscribing
-significance.warm_up()  # and the diagnoser's session
-kernels.warm_up()
+warm_up_decision()  # and the diagnoser's session
 before = signatures()
 bearing = CATALOG["6205"]
 for model_set, fs in (("sim_48k", 48000.0), ("sim_12k", 12000.0), ("none", 48000.0)):

@@ -2,7 +2,7 @@
 
 One definition used by the launch files (``launch/monitor.launch.py``, ``launch/fleet.launch.py``),
 the ``bearing-graph`` starter of ``make demo``, the multi-node processes of a fleet
-(:mod:`.nodes_main`) and the launch/YAML checks in tests.
+(:mod:`.multi_node_process`) and the launch/YAML checks in tests.
 """
 
 import pathlib

@@ -30,6 +30,7 @@ import pathlib
 import signal
 import sys
 import time
+from dataclasses import dataclass
 
 import yaml
 
@@ -97,7 +98,19 @@ def process_argv(proc, params_file: pathlib.Path) -> list:
             *proc.ros_arguments(params_file), *gate]
 
 
-def main(argv=None) -> int:
+@dataclass
+class RunPlan:
+    """What one run starts: the processes, the parameters file they read, the motors' namespaces,
+    and the fleet they belong to (None for one graph)."""
+
+    procs: list
+    params_file: pathlib.Path
+    namespaces: list
+    fleet: object = None
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line of ``bearing-graph``."""
     parser = argparse.ArgumentParser(prog="bearing-graph", description=__doc__.split("\n\n")[0])
     parser.add_argument("--params", type=pathlib.Path, help=f"parameters YAML (default: the installed {CONFIG_NAME}; "
                         "with a fleet: the per-node base parameters)")
@@ -116,72 +129,49 @@ def main(argv=None) -> int:
                         help="seconds before a dead node is restarted")
     parser.add_argument("--max-restarts", type=int, default=MAX_RESTARTS,
                         help="restarts of one node per minute before the graph stops (crash loop)")
-    args = parser.parse_args(argv)
+    return parser
 
-    fleet = None
+
+def plan_run(args) -> RunPlan:
+    """The fleet of ``--fleet`` / ``--motors`` (its parameters written to ``--out``), else one
+    graph in ``--namespace``; raises FleetError for an unusable fleet file."""
     if args.fleet or args.motors is not None:
-        try:
-            fleet = load_fleet(args.fleet or default_fleet_file(), args.motors, args.params)
-        except FleetError as exc:
-            print(f"bearing-graph: {exc}", file=sys.stderr)
-            return EXIT_BAD_FLEET
+        fleet = load_fleet(args.fleet or default_fleet_file(), args.motors, args.params)
         args.out.mkdir(parents=True, exist_ok=True)
         params_file = args.out / FLEET_PARAMS
         params_file.write_text(yaml.safe_dump(parameters_file(fleet), sort_keys=False))
-        procs, namespaces = processes(fleet), [m.name for m in fleet.motors]
-    else:
-        params_file = args.params or config_path()
-        procs, namespaces = single_graph(args.namespace), [args.namespace]
-    if not params_file.is_file():
-        print(f"bearing-graph: parameters file {params_file} not found", file=sys.stderr)
+        return RunPlan(processes(fleet), params_file, [m.name for m in fleet.motors], fleet)
+    return RunPlan(single_graph(args.namespace), args.params or config_path(), [args.namespace])
+
+
+def main(argv=None) -> int:
+    """``bearing-graph`` (module docstring): plan the run, start and supervise it, report; the exit code."""
+    args = build_parser().parse_args(argv)
+    try:
+        plan = plan_run(args)
+    except FleetError as exc:
+        print(f"bearing-graph: {exc}", file=sys.stderr)
+        return EXIT_BAD_FLEET
+    if not plan.params_file.is_file():
+        print(f"bearing-graph: parameters file {plan.params_file} not found", file=sys.stderr)
         return EXIT_FAILED
-    missing = missing_parts(procs)
-    runnable = [p for p in procs if not any(m.startswith(f"{p.name} ") for m in missing)]
+    missing = missing_parts(plan.procs)
+    runnable = [p for p in plan.procs if not any(m.startswith(f"{p.name} ") for m in missing)]
 
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # a demo stays on this machine
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # nodes solve small systems: BLAS threads only contend
     from .graph_watcher import GraphWatcher  # rclpy: imported only when the graph runs
 
     policy = RestartPolicy(args.restart_delay, args.max_restarts)
-    sensors = failure = None
     with StopSignals() as stop:
-        watcher = GraphWatcher(namespaces)
+        watcher = GraphWatcher(plan.namespaces)
         group = ProcessGroup(on_line=None)
-        watcher.on_change = lambda motor, text: group.echo(text, f"{motor} state" if fleet else "state")
+        watcher.on_change = lambda motor, text: group.echo(text, f"{motor} state" if plan.fleet else "state")
         for part in missing:
             group.echo(f"MISSING: {part}")
         try:
-            # the monitoring nodes first, the simulators once the diagnosers' states reach us
-            monitors = [p for p in runnable if not p.sensor]
-            for proc in monitors:
-                group.start(proc.name, process_argv(proc, params_file))
-            awaited = [p.namespace for p in runnable if p.sensor and p.namespace in diagnosed_motors(monitors)]
-            if awaited:
-                unheard = watcher.wait_for_diagnosers(DIAGNOSER_WAIT_S, stop, awaited)
-                if unheard:
-                    group.echo(f"no diagnoser publishing after {DIAGNOSER_WAIT_S:g} s"
-                               + (f" ({', '.join(unheard)})" if fleet else "") + "; starting the simulator anyway")
-            for proc in runnable:
-                if proc.sensor and not stop:  # Ctrl-C while waiting: no simulator to start and stop again
-                    group.start(proc.name, process_argv(proc, params_file))
-            for member in group.members:
-                group.echo(f"started {member.name} (pid {member.process.pid})")
-            sensor_names = {p.name for p in runnable if p.sensor}
-            sensors = [m for m in group.members if m.name in sensor_names]
-            # Without a simulator nothing ends the scenario: show that the rest starts, then stop
-            # (a fleet of external sensors runs until Ctrl-C or the timeout).
-            expected = any(p.sensor for p in procs)
-            deadline = time.monotonic() + (args.timeout if sensors or not expected else MISSING_SIMULATOR_RUN_S)
-            failure = supervise(group, policy, deadline, stop, [m.name for m in sensors])
-            if failure:
-                group.echo(failure)
-            elif sensors and all(m.returncode == 0 for m in sensors):
-                group.echo("scenario ended; waiting for the diagnoser to decide the last window")
-                simulated = [m.name for m in fleet.motors if m.simulated] if fleet else None
-                late = watcher.wait_decided_to_end(args.settle, stop, simulated)
-                if late:
-                    group.echo(f"the diagnoser did not reach the end of the data within {args.settle:g} s"
-                               + (f": {', '.join(late)}" if fleet else ""))
+            sensors = start_graph(group, watcher, runnable, plan, stop)
+            failure = run_to_end(group, watcher, policy, sensors, plan, args, stop)
         finally:
             codes = group.stop()
             watcher.close()
@@ -191,16 +181,56 @@ def main(argv=None) -> int:
     if sensors:
         completed = all(m.returncode == 0 for m in sensors) and not stop and failure is None
     else:
-        completed = bool(fleet) and failure is None  # external sensors: stopped on request or at the timeout
-    for motor, log in watcher.motors.items():
-        report = write_report(log, args.out / motor if fleet else args.out, completed)
-        if report and (log.truth_changes() or not fleet):
-            print((f"{motor}: " if fleet else "") + report, flush=True)
+        completed = bool(plan.fleet) and failure is None  # external sensors: stopped on request or at the timeout
+    write_reports(watcher, plan, args.out, completed)
     if missing:
         print("bearing-graph: not runnable yet: " + "; ".join(missing), file=sys.stderr)
         return EXIT_MISSING
     others_ok = all(code in (0, -signal.SIGINT) for name, code in codes.items())
     return 0 if completed and others_ok else EXIT_FAILED
+
+
+def start_graph(group: ProcessGroup, watcher, runnable: list, plan: RunPlan, stop) -> list:
+    """Start the monitoring nodes, then, once the diagnosers' states reach ``watcher`` (or after
+    :data:`DIAGNOSER_WAIT_S`), the simulators; return the simulators' members of ``group``."""
+    monitors = [p for p in runnable if not p.sensor]
+    for proc in monitors:
+        group.start(proc.name, process_argv(proc, plan.params_file))
+    awaited = [p.namespace for p in runnable if p.sensor and p.namespace in diagnosed_motors(monitors)]
+    if awaited:
+        unheard = watcher.wait_for_diagnosers(DIAGNOSER_WAIT_S, stop, awaited)
+        if unheard:
+            group.echo(f"no diagnoser publishing after {DIAGNOSER_WAIT_S:g} s"
+                       + (f" ({', '.join(unheard)})" if plan.fleet else "") + "; starting the simulator anyway")
+    for proc in runnable:
+        if proc.sensor and not stop:  # Ctrl-C while waiting: no simulator to start and stop again
+            group.start(proc.name, process_argv(proc, plan.params_file))
+    for member in group.members:
+        group.echo(f"started {member.name} (pid {member.process.pid})")
+    sensor_names = {p.name for p in runnable if p.sensor}
+    return [m for m in group.members if m.name in sensor_names]
+
+
+def run_to_end(group: ProcessGroup, watcher, policy: RestartPolicy, sensors: list, plan: RunPlan, args,
+               stop) -> str | None:
+    """Supervise the graph (:func:`supervise`) until the scenario ends, ``stop`` or the timeout;
+    after a completed scenario, wait up to ``--settle`` for the diagnosers to decide its end.
+    Returns why the graph had to stop, or None."""
+    # Without a simulator nothing ends the scenario: show that the rest starts, then stop
+    # (a fleet of external sensors runs until Ctrl-C or the timeout).
+    expected = any(p.sensor for p in plan.procs)
+    deadline = time.monotonic() + (args.timeout if sensors or not expected else MISSING_SIMULATOR_RUN_S)
+    failure = supervise(group, policy, deadline, stop, [m.name for m in sensors])
+    if failure:
+        group.echo(failure)
+    elif sensors and all(m.returncode == 0 for m in sensors):
+        group.echo("scenario ended; waiting for the diagnoser to decide the last window")
+        simulated = [m.name for m in plan.fleet.motors if m.simulated] if plan.fleet else None
+        late = watcher.wait_decided_to_end(args.settle, stop, simulated)
+        if late:
+            group.echo(f"the diagnoser did not reach the end of the data within {args.settle:g} s"
+                       + (f": {', '.join(late)}" if plan.fleet else ""))
+    return failure
 
 
 def supervise(group: ProcessGroup, policy: RestartPolicy, deadline: float, stop,
@@ -233,6 +263,15 @@ def supervise(group: ProcessGroup, policy: RestartPolicy, deadline: float, stop,
                 group.echo(f"restarted {member.name} (pid {member.process.pid})")
         time.sleep(0.1)
     return None
+
+
+def write_reports(watcher, plan: RunPlan, out: pathlib.Path, completed: bool) -> None:
+    """Every motor's summary and plots (:func:`write_report`; a fleet's in ``out``/<motor>/),
+    printed for one graph and for the motors that have a ground truth."""
+    for motor, log in watcher.motors.items():
+        report = write_report(log, out / motor if plan.fleet else out, completed)
+        if report and (log.truth_changes() or not plan.fleet):
+            print((f"{motor}: " if plan.fleet else "") + report, flush=True)
 
 
 def write_report(log, out: pathlib.Path, completed: bool) -> str:

@@ -19,19 +19,20 @@ that was right in each bin) complete it. Every record runs with the same setting
 from __future__ import annotations
 
 from collections import defaultdict
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from bearing_common.bearings import BearingError, load_bearing
 from bearing_common.states import FaultState, parse_fault
 from bearing_recordings.load import load_recording
 from bearing_recordings.recording import InputError, Recording
 from bearing_recordings.resampling import resample
 
-from .decision_config import config_for
-from .offline import choose_model_set, diagnose_recording
-from .segments import is_sensor_problem
+from .front_ends import config_for
+from .pipeline import choose_model_set
+from .recording_diagnosis import diagnose_recording
 
 #: Confidence bins of the calibration table.
 CONFIDENCE_BINS = (0.0, 0.5, 0.7, 0.9, 0.99, 1.0 + 1e-9)
@@ -55,8 +56,8 @@ class LabelledRecording:
     def load(self) -> Recording:
         rec = load_recording(self.path, sample_rate=self.sample_rate, rpm=self.rpm, channel=self.channel)
         if self.resample_to:
-            rec = Recording(resample(rec.accel, rec.sample_rate, self.resample_to), self.resample_to, rec.rpm,
-                            rec.source, None, rec.channel, rec.path)
+            rec = replace(rec, accel=resample(rec.accel, rec.sample_rate, self.resample_to),
+                          sample_rate=self.resample_to, truth=None)
         return rec
 
 
@@ -108,14 +109,14 @@ def evaluate(record: LabelledRecording, method: str = "model", speed_told: bool 
     DiagnoserConfig to the one to use (ablations); without ``speed_told`` the speed is estimated."""
     try:
         rec = record.load()
+        bearing = load_bearing(record.bearing)
         if not speed_told:
             rec.rpm = None
         config = None
         if variant is not None:
-            from bearing_common.bearings import load_bearing
-            config = variant(config_for(choose_model_set(rec, load_bearing(record.bearing)).name))
-        res = diagnose_recording(rec, method=method, rpm=rec.rpm, bearing=record.bearing, config=config)
-    except InputError as exc:
+            config = variant(config_for(choose_model_set(rec.source, rec.sample_rate, bearing).name))
+        res = diagnose_recording(rec, method=method, rpm=rec.rpm, bearing=bearing, config=config)
+    except (InputError, BearingError) as exc:
         return RecordResult(record, method, None, 0.0, 0.0, None, 0, 0, 0, 0, 0, error=str(exc))
     duration = res.accel.size / res.sample_rate
     cover: dict = defaultdict(float)
@@ -124,7 +125,7 @@ def evaluate(record: LabelledRecording, method: str = "model", speed_told: bool 
         cover[s.state] += s.end - s.start
         conf[s.state] += (s.end - s.start) * s.confidence
     state = max(cover, key=cover.get) if cover else None
-    windows = [(d.state, d.confidence) for d in res.decisions if not is_sensor_problem(d)]
+    windows = [(d.state, d.confidence) for d in res.decisions if d.diagnosed]
     first = next((s.detected_at for s in res.segments if s.state == state), None)
     return RecordResult(record, method, state, cover[state] / duration if state is not None else 0.0,
                         conf[state] / cover[state] if state is not None and cover[state] > 0 else 0.0, first,
@@ -152,9 +153,11 @@ def totals(results: list[RecordResult]) -> dict:
 
 def calibration(results: list[RecordResult], faults: bool) -> list[tuple[float, float, int, float]]:
     """(bin low, bin high, windows, share right) of the published confidence over all windows
-    whose published state is a fault (``faults``) or NORMAL."""
+    whose published state names a part (``faults``: OUTER_RACE, INNER_RACE, BALL) or is NORMAL
+    (UNKNOWN's confidence is that something is wrong, not that a part is)."""
+    parts = (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL)
     pairs = [(c, s == r.record.truth) for r in results for s, c in r.window_states
-             if (s != FaultState.NORMAL) == faults]
+             if (s in parts if faults else s == FaultState.NORMAL)]
     conf = np.array([c for c, _ in pairs])
     right = np.array([ok for _, ok in pairs])
     rows = []

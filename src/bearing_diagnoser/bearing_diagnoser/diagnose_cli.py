@@ -25,6 +25,9 @@ def build_parser() -> argparse.ArgumentParser:
                                 description="Diagnose a bearing vibration recording offline.")
     p.add_argument("file", help="bearing-sim .npz, MATLAB .mat (CWRU, MFPT, one signal) or rosbag2 directory")
     p.add_argument("--rpm", type=float, help="shaft speed (rev/min); default from the file, else estimated")
+    p.add_argument("--rpm-tolerance", type=float, metavar="FRACTION",
+                   help="relative accuracy of --rpm (default 0.10, a nameplate's; the speed is measured from the "
+                        "vibration within it, and beyond it reported); a file's own speed keeps the file's")
     p.add_argument("--sample-rate", type=float, help="input sample rate (Hz); required where the file has none")
     p.add_argument("--channel", help="channel/variable name, e.g. X105_DE_time (default: the drive end)")
     p.add_argument("--bearing", metavar="NAME|FILE.yaml",
@@ -45,11 +48,11 @@ class _OneLine(logging.Formatter):
 
 def main(argv=None) -> int:
     """Run the CLI; returns the exit status (0 on success)."""
-    from bearing_common.bearings import BearingError
+    from bearing_common.bearings import BearingError, load_bearing
     from bearing_recordings.load import load_recording
     from bearing_recordings.recording import InputError
 
-    from .offline import diagnose_recording
+    from .recording_diagnosis import diagnose_recording
 
     args = build_parser().parse_args(argv)
     handler = logging.StreamHandler(sys.stderr)
@@ -63,16 +66,19 @@ def main(argv=None) -> int:
                              units=args.units)
         for note in rec.notes or ():
             log.info(note)
-        res = diagnose_recording(rec, model_set=args.model_set, method=args.method, rpm=args.rpm,
-                                 bearing=args.bearing, keep_streams=bool(args.plot))
+        bearing = load_bearing(args.bearing) if args.bearing else rec.bearing
+        if args.rpm_tolerance is not None and not 0.0 < args.rpm_tolerance < 0.5:
+            raise InputError(f"--rpm-tolerance must be in (0, 0.5), got {args.rpm_tolerance:g}")
+        res = diagnose_recording(rec, model_set=args.model_set, method=args.method, rpm=args.rpm, bearing=bearing,
+                                 keep_streams=bool(args.plot), rpm_tolerance=args.rpm_tolerance)
     except (InputError, BearingError) as exc:
         print(f"bearing-diagnose: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     finally:
         log.removeHandler(handler)
         logging.getLogger("bearing_recordings").removeHandler(handler)
-    for start, end, problem in res.sensor_problems[:1]:
-        print(f"bearing-diagnose: warning: {len(res.sensor_problems)} windows not diagnosed (sensor problem), "
+    for start, end, problem in res.not_diagnosed[:1]:
+        print(f"bearing-diagnose: warning: {len(res.not_diagnosed)} windows not diagnosed, "
               f"first at {start:.3f}-{end:.3f} s: {problem}", file=sys.stderr)
     for seg in res.segments:
         print(json.dumps(seg.to_json()), flush=True)

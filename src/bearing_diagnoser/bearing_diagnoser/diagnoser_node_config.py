@@ -12,8 +12,8 @@ PARAMETERS = (
     ParameterSpec("rpm", 0.0, "nominal shaft speed (rev/min) used while no shaft_speed arrives, refined from the "
                   "vibration within rpm_tolerance; 0 = unknown: estimated from the vibration (unreliable)",
                   non_negative, dynamic=True),
-    ParameterSpec("rpm_tolerance", 0.05, "relative tolerance of the rpm parameter (an induction motor runs up to "
-                  "about 4 % off its nameplate speed between no load and full load)",
+    ParameterSpec("rpm_tolerance", 0.10, "relative tolerance of the rpm parameter (the nameplate speed of a "
+                  "drive-fed motor can be 10 % off the shaft's; measured speeds beyond it are reported)",
                   lambda v: None if 0.0 < v < 0.5 else "must be in (0, 0.5)", dynamic=True),
     ParameterSpec("window", 0.0, "analysis window (s); 0 = derived: 4 cage periods of the bearing (real "
                   "machines), the model set's default (simulator)", non_negative, dynamic=True),

@@ -7,7 +7,7 @@ hardware id the motor: the ``motor`` parameter, the namespace or the host's name
 ERROR a fault, WARN UNKNOWN, a silent observer or an unusable sensor signal, STALE no input;
 a last STALE "stopped" when the node ends). Signal timing comes from the residuals' stamps
 and sample indices only, so replays at any rate (with ``use_sim_time``) give the same
-decisions. The logic lives in :class:`.session.DiagnoserSession`; this module only wires
+decisions. The logic lives in :class:`.diagnoser_session.DiagnoserSession`; this module only wires
 ROS to it.
 """
 
@@ -25,7 +25,7 @@ from bearing_msgs.msg import FaultState as FaultStateMsg
 from bearing_msgs.msg import Residual, ShaftSpeed
 
 from .diagnoser_node_config import PARAMETERS
-from .session import DiagnoserSession, Health, StateReport, motor_name, status_name
+from .diagnoser_session import DiagnoserSession, Health, StateReport, motor_name, status_name
 
 
 class DiagnoserNode(Node):
@@ -71,8 +71,9 @@ class DiagnoserNode(Node):
                             model_set=report.model_set, detail=report.detail)
         msg.header.stamp = to_stamp(report.stamp)
         msg.onset = to_stamp(report.onset)
-        msg.hypotheses = list(report.scores)
-        msg.scores = [float(v) for v in report.scores.values()]
+        scores = report.scores.as_dict()
+        msg.hypotheses = list(scores)
+        msg.scores = [float(v) for v in scores.values()]
         self.pub_state.publish(msg)
         if report.changed:
             self.get_logger().info(f"t={report.stamp:.3f} s  state {report.state.name} "

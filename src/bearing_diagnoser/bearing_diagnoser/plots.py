@@ -19,7 +19,7 @@ import numpy as np
 
 from bearing_common.states import FaultState
 
-from .periodicity import train_autocorrelation, train_cross_correlation
+from .decision.thesis_blocks import train_autocorrelation, train_cross_correlation
 
 #: Longest stretch (s) used for the cross-correlation figures (cost grows with length).
 XCORR_MAX_S = 2.0
@@ -46,7 +46,7 @@ def _save(plt, fig, path: Path, paths: list[Path]) -> None:
 
 
 def write_figures(result, directory) -> list[Path]:
-    """Write the figures of an :class:`~.offline.OfflineResult` into ``directory``; return their paths."""
+    """Write the figures of an :class:`~.recording_diagnosis.OfflineResult` into ``directory``; return their paths."""
     plt = _plt()
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
@@ -100,24 +100,26 @@ def write_figures(result, directory) -> list[Path]:
     if dec:
         fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(10, 7))
         te = np.asarray([d.window_end for d in dec])
-        for h in ("outer_race", "inner_race", "ball"):
-            if any(h in d.scores for d in dec):
-                a1.plot(te, [d.scores.get(h, np.nan) for d in dec], label=f"{h} significance ÷ threshold")
+        for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL):
+            if any(h in d.scores.significance for d in dec):
+                a1.plot(te, [d.scores.significance.get(h, np.nan) for d in dec],
+                        label=f"{h.label} significance ÷ threshold")
         a1.axhline(1.0, color="k", ls="--", lw=0.8)
         a1.legend(fontsize=8)
-        if any("band_low_hz" in d.scores for d in dec):
-            lo = np.asarray([d.scores.get("band_low_hz", np.nan) for d in dec])
-            hi = np.asarray([d.scores.get("band_high_hz", np.nan) for d in dec])
+        bands = [getattr(d.scores, "band", None) for d in dec]
+        if any(b is not None for b in bands):
+            lo = np.asarray([np.nan if b is None else b.low for b in bands])
+            hi = np.asarray([np.nan if b is None else b.high for b in bands])
             a2.fill_between(te, lo / 1e3, hi / 1e3, step="pre", alpha=0.4, label="chosen demodulation band (kHz)")
             a2.set_ylabel("kHz")
             speed = a2.twinx()
-            speed.plot(te, [d.scores.get("speed_hz", np.nan) * 60.0 for d in dec], color="C1", lw=0.8,
+            speed.plot(te, [d.scores.speed_hz * 60.0 for d in dec], color="C1", lw=0.8,
                        label="shaft speed used (rpm)")
             speed.set_ylabel("rpm")
             speed.legend(loc="lower right", fontsize=8)
         else:
-            for h in ("outer_race", "inner_race"):
-                a2.plot(te, [d.scores.get(f"{h}_explained", np.nan) for d in dec], label=f"{h} model explains")
+            for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE):
+                a2.plot(te, [d.scores.explained.get(h, np.nan) for d in dec], label=f"{h.label} model explains")
             a2.set_ylim(-1.05, 1.05)
         a2.legend(loc="upper left", fontsize=8)
         tl, lab = _state_track(dec, "label")

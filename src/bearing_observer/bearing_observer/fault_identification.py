@@ -37,7 +37,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy import signal
 
-from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.bearings import Bearing
 from bearing_common.states import FaultState, parse_fault
 
 from .hw_model import HWModel, ModelFit
@@ -223,14 +223,35 @@ class IdentificationResult:
     preprocessing: Preprocessing
 
 
-def _train_for(model_kind_ir, n, fs, freq, phase, fr, theta, c, width, start_time=0.0):
-    if model_kind_ir:
-        return impulse_train(n, fs, freq, phase, start_time, shaft_frequency=fr,
-                             shaft_phase=theta, offset=c, pulse_width=width)
-    return impulse_train(n, fs, freq, phase, start_time, pulse_width=width)
+@dataclass(frozen=True)
+class _Train:
+    """The train the fault model is identified with: impacts at ``frequency`` (Hz), inner
+    race weighted by eq. 2.58 with ``shaft_frequency`` (Hz), ``shaft_phase`` (rad) and
+    ``offset``; pulses ``pulse_width`` (s) wide."""
+
+    modulated: bool
+    sample_rate: float
+    frequency: float
+    shaft_frequency: float
+    shaft_phase: float
+    offset: float
+    pulse_width: float
+
+    def render(self, n: int, phase: float, start_time: float = 0.0) -> np.ndarray:
+        """``n`` samples of the train (eq. 2.58 weights for the inner race, else eq. 2.55)
+        at fault phase ``phase`` (rad), the first at ``start_time`` (s)."""
+        if self.modulated:
+            return impulse_train(n, self.sample_rate, self.frequency, phase, start_time,
+                                 shaft_frequency=self.shaft_frequency, shaft_phase=self.shaft_phase,
+                                 offset=self.offset, pulse_width=self.pulse_width)
+        return self.unit(n, phase, start_time)
+
+    def unit(self, n: int, phase: float, start_time: float = 0.0) -> np.ndarray:
+        """The same impacts with unit weights (eq. 2.55)."""
+        return impulse_train(n, self.sample_rate, self.frequency, phase, start_time, pulse_width=self.pulse_width)
 
 
-def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bearing | str, orders=None,
+def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bearing, orders=None,
                          n_breakpoints: int = N_BREAKPOINTS, n_average: int = N_AVERAGE_IR,
                          refine_frequency: bool = True, provenance: dict | None = None, mode: str = "thesis",
                          n_series: int = 8) -> IdentificationResult:
@@ -246,9 +267,8 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bear
         Shaft speed (rev/min).
     fault : FaultState or str
         ``outer_race`` or ``inner_race``.
-    bearing : Bearing or str
-        The machine's bearing (anything :func:`bearing_common.bearings.load_bearing` reads):
-        gives the kinematic fault frequency; recorded in the model's provenance.
+    bearing : Bearing
+        The machine's bearing: gives the kinematic fault frequency; recorded in the model's provenance.
     orders : (nb, nf, nk), optional
         Linear-block orders; default :data:`DEFAULT_ORDERS`.
     n_breakpoints : int
@@ -273,78 +293,131 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bear
     IdentificationResult
     """
     t0 = time.perf_counter()
+    state, y = _checked_record(fault, y)
+    is_ir = state == FaultState.INNER_RACE
+    nb, nf, nk = orders or DEFAULT_ORDERS[state.label]
+    fs = float(sample_rate)
+    fr = rpm / 60.0
+    # steps 1-3 (module docstring): fault frequency, phase, periods, identification data
+    f_kin = bearing.frequencies(rpm).of(state)
+    freq, phase, per = _fault_periods(y, fs, f_kin, refine_frequency)
+    prep = Preprocessing(float(f_kin), float(freq), float(phase), int(per.matrix.shape[0]))
+    if is_ir:
+        sel, y_id, theta, c = _weighted_average(per, fr, n_average, prep)
+    else:
+        (sel, y_id), theta, c = _representative_period(per, prep), 0.0, 0.0
+    train = _Train(is_ir, fs, freq, fr, theta, c, 1.0 / fs)
+    sel, u_id, y_id = _identification_data(mode, y, per, sel, y_id, train, phase,
+                                           n_average if is_ir else n_series)
+    prep.mode = mode
+    # step 4: the HW fit, then the strictly periodic train aligned with the whole record
+    fit = hw_fit(u_id, y_id, nb, nf, nk, n_breakpoints)
+    model = HWModel(fault_type=state.label, sample_rate=fs, rpm=float(rpm), fault_frequency=freq,
+                    fault_order=freq / fr, b=fit.b, f=fit.f, nk=nk,
+                    input_nonlinearity=MonotonePiecewiseLinear.gain(1.0), output_nonlinearity=fit.g,
+                    train_offset=c, pulse_width=train.pulse_width)
+    yhat_id = model.simulate(u_id)
+    phase = refine_phase(model, y, phase, fr, theta, c)  # sub-sample phase scan, ±1/4 period
+    prep.phase_refined = phase
+    u_series = train.render(y.size, phase)
+    yhat_series = model.simulate(u_series)
+    id_mask = _identification_mask(y.size, per, sel, mode)
+    model.fit = _model_fit(fit, y, yhat_series, per, sel, id_mask, y_id.size, fs)
+    prep.identification_seconds = time.perf_counter() - t0
+    model.provenance = _provenance(provenance, bearing, prep)
+    return IdentificationResult(model, u_id, y_id, yhat_id, u_series, y, yhat_series, id_mask, prep)
+
+
+def _checked_record(fault, y) -> tuple[FaultState, np.ndarray]:
+    """The fault (outer or inner race) and the record as a finite 1-D float array; ValueError
+    for another fault or another record."""
     state = parse_fault(fault) if isinstance(fault, str) else FaultState(fault)
     if state not in (FaultState.OUTER_RACE, FaultState.INNER_RACE):
         raise ValueError(f"no HW model for fault {state.label}")
-    fault_type = state.label
-    is_ir = state == FaultState.INNER_RACE
     y = np.asarray(y, dtype=float)
     if y.ndim != 1 or not np.all(np.isfinite(y)):
         raise ValueError("y must be a finite 1-D array")
-    nb, nf, nk = orders or DEFAULT_ORDERS[fault_type]
-    fs = float(sample_rate)
-    fr = rpm / 60.0
-    bearing = load_bearing(bearing)
-    f_kin = bearing.frequencies(rpm).of(state)
-    freq = refine_fault_frequency(y, fs, f_kin) if refine_frequency else f_kin
-    phase = estimate_fault_phase(y, fs, freq)
-    per = cut_periods(y, fs, freq, phase)
+    return state, y
+
+
+def _fault_periods(y, sample_rate: float, kinematic_frequency: float, refine_frequency: bool):
+    """Steps 1-3 up to the cut: the fault frequency (Hz; the kinematic one refined on the
+    data, or not), the fault phase (rad) and the record's whole fault periods (at least 3,
+    else ValueError)."""
+    freq = refine_fault_frequency(y, sample_rate, kinematic_frequency) if refine_frequency else kinematic_frequency
+    phase = estimate_fault_phase(y, sample_rate, freq)
+    per = cut_periods(y, sample_rate, freq, phase)
     if per.matrix.shape[0] < 3:
         raise ValueError("record too short: need at least 3 whole fault periods")
-    amps, template = rank1(per.matrix)
-    width = 1.0 / fs
-    prep = Preprocessing(float(f_kin), float(freq), float(phase), int(per.matrix.shape[0]))
-    if is_ir:
-        a, theta, c, r2 = fit_modulation(amps, per.impact_times, fr)
-        m = np.cos(TWO_PI * fr * per.impact_times + theta) + c
-        n_avg = min(n_average, per.matrix.shape[0])
-        sel = np.arange(n_avg)
-        y_id = (m[sel] @ per.matrix[sel]) / float(m[sel] @ m[sel])
-        plain = per.matrix[sel].mean(axis=0)
-        prep.shaft_phase, prep.offset, prep.modulation_amplitude, prep.modulation_r2 = theta, c, a, r2
-        prep.n_average = int(n_avg)
-        prep.plain_average_energy_ratio = float(plain @ plain) / max(float(y_id @ y_id), 1e-300)
-    else:
-        theta, c = 0.0, 0.0
-        corr = (per.matrix @ template) / np.maximum(np.linalg.norm(per.matrix, axis=1), 1e-300)
-        best = int(np.argmax(corr))
-        sel = np.array([best])
-        y_id = per.matrix[best].copy()
-        prep.representative_period, prep.representative_correlation = best, float(corr[best])
+    return freq, phase, per
+
+
+def _weighted_average(per: Periods, shaft_frequency: float, n_average: int, prep: Preprocessing):
+    """Inner race (module docstring, step 3): the eq. 2.58 fit of the per-impact amplitudes
+    and the modulation-weighted average of the first ``n_average`` periods.
+
+    Returns (indices of the periods used, the average, shaft phase theta (rad), offset c);
+    the fit and the plain average's energy ratio go into ``prep``.
+    """
+    amps, _ = rank1(per.matrix)
+    a, theta, c, r2 = fit_modulation(amps, per.impact_times, shaft_frequency)
+    m = np.cos(TWO_PI * shaft_frequency * per.impact_times + theta) + c
+    n_avg = min(n_average, per.matrix.shape[0])
+    sel = np.arange(n_avg)
+    y_id = (m[sel] @ per.matrix[sel]) / float(m[sel] @ m[sel])
+    plain = per.matrix[sel].mean(axis=0)
+    prep.shaft_phase, prep.offset, prep.modulation_amplitude, prep.modulation_r2 = theta, c, a, r2
+    prep.n_average = int(n_avg)
+    prep.plain_average_energy_ratio = float(plain @ plain) / max(float(y_id @ y_id), 1e-300)
+    return sel, y_id, theta, c
+
+
+def _representative_period(per: Periods, prep: Preprocessing):
+    """Outer race (module docstring, step 3): the measured period that correlates best with
+    the rank-1 template; returns (its index as a 1-array, the period), noted in ``prep``."""
+    _, template = rank1(per.matrix)
+    corr = (per.matrix @ template) / np.maximum(np.linalg.norm(per.matrix, axis=1), 1e-300)
+    best = int(np.argmax(corr))
+    prep.representative_period, prep.representative_correlation = best, float(corr[best])
+    return np.array([best]), per.matrix[best].copy()
+
+
+def _identification_data(mode: str, y, per: Periods, sel, y_id, train: _Train, phase: float, n_series: int):
+    """Input and output of the HW fit for ``mode`` (:func:`identify_fault_model`) and the
+    periods they cover: ``thesis`` keeps ``y_id`` of ``sel`` with the unit train over its
+    segment (the impact ``per.pre`` samples in); ``series`` takes the record over the first
+    ``n_series`` periods with the full train."""
     if mode == "thesis":
-        # Identification input: the unit train over the segment (impact ``pre`` samples in).
         s0 = per.starts[sel[0]]
-        u_id = impulse_train(per.length, fs, freq, phase, start_time=s0 / fs, pulse_width=width)
-    elif mode == "series":
-        sel = np.arange(min(n_average if is_ir else n_series, per.matrix.shape[0]))
+        return sel, train.unit(per.length, phase, start_time=s0 / train.sample_rate), y_id
+    if mode == "series":
+        sel = np.arange(min(n_series, per.matrix.shape[0]))
         s0, s1 = per.starts[sel[0]], per.starts[sel[-1]] + per.length
-        u_id = _train_for(is_ir, s1 - s0, fs, freq, phase, fr, theta, c, width, start_time=s0 / fs)
-        y_id = y[s0:s1].copy()
-    else:
-        raise ValueError(f"mode must be 'thesis' or 'series', got {mode!r}")
-    prep.mode = mode
-    fit = hw_fit(u_id, y_id, nb, nf, nk, n_breakpoints)
-    lin_in = MonotonePiecewiseLinear.gain(1.0)
-    model = HWModel(fault_type=fault_type, sample_rate=fs, rpm=float(rpm), fault_frequency=freq,
-                    fault_order=freq / fr, b=fit.b, f=fit.f, nk=nk, input_nonlinearity=lin_in,
-                    output_nonlinearity=fit.g, train_offset=c, pulse_width=width)
-    yhat_id = model.simulate(u_id)
-    # Align the strictly periodic train with the record (sub-sample phase scan, ±1/4 period)
-    phase = refine_phase(model, y, phase, fr, theta, c)
-    prep.phase_refined = phase
-    # time series with the identified train (strictly periodic)
-    u_series = _train_for(is_ir, y.size, fs, freq, phase, fr, theta, c, width)
-    yhat_series = model.simulate(u_series)
-    id_mask = np.zeros(y.size, dtype=bool)
+        return sel, train.render(s1 - s0, phase, start_time=s0 / train.sample_rate), y[s0:s1].copy()
+    raise ValueError(f"mode must be 'thesis' or 'series', got {mode!r}")
+
+
+def _identification_mask(n: int, per: Periods, sel, mode: str) -> np.ndarray:
+    """Samples of the record that the fit saw (the periods ``sel``; ``series``: their span)."""
+    id_mask = np.zeros(n, dtype=bool)
     for s in per.starts[sel]:
         id_mask[s:s + per.length] = True
     if mode == "series":
         id_mask[per.starts[sel[0]]:per.starts[sel[-1]] + per.length] = True
+    return id_mask
+
+
+def _model_fit(fit, y, yhat_series, per: Periods, sel, id_mask, n_identification: int, sample_rate: float) -> ModelFit:
+    """Fit figures of the model: on its identification data (``fit``, the HW fit), on the
+    held-back samples from the first whole period on, per held-back period, and on the
+    whole series from the first period on (``yhat_series``: the model driven by the
+    strictly periodic train)."""
     held = ~id_mask
     held[: per.starts[0]] = False  # before the first whole period: no full model response
+    used = set(sel.tolist())
     per_fits = [fit_percent(y[s:s + per.length], yhat_series[s:s + per.length])
-                for i, s in enumerate(per.starts) if i not in set(sel.tolist())]
-    model.fit = ModelFit(
+                for i, s in enumerate(per.starts) if i not in used]
+    return ModelFit(
         identification=fit.fit,
         identification_linear_only=fit.fit_linear,
         held_back=fit_percent(y[held], yhat_series[held]),
@@ -353,16 +426,20 @@ def identify_fault_model(y, sample_rate: float, rpm: float, fault, bearing: Bear
         # the same with the single least-squares amplitude: how much a strictly periodic
         # train can explain at all (real impacts wander; see shared/diagnosis-notes.md)
         time_series_ls_amplitude=_ls_scaled_fit(y[per.starts[0]:], yhat_series[per.starts[0]:]),
-        identification_samples=int(y_id.size),
+        identification_samples=int(n_identification),
         held_back_samples=int(held.sum()),
-        series_seconds=y.size / fs,
+        series_seconds=y.size / sample_rate,
     )
-    prep.identification_seconds = time.perf_counter() - t0
-    model.provenance = dict(provenance or {})
-    model.provenance.setdefault("date", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
-    model.provenance["bearing"] = bearing.to_dict()
-    model.provenance["preprocessing"] = prep.to_dict()
-    return IdentificationResult(model, u_id, y_id, yhat_id, u_series, y, yhat_series, id_mask, prep)
+
+
+def _provenance(given: dict | None, bearing: Bearing, prep: Preprocessing) -> dict:
+    """The model file's provenance: ``given``, the date (UTC, unless given), the bearing and
+    the preprocessing."""
+    out = dict(given or {})
+    out.setdefault("date", time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+    out["bearing"] = bearing.to_dict()
+    out["preprocessing"] = prep.to_dict()
+    return out
 
 
 def _ls_scaled_fit(y, yhat) -> tuple[float, float]:
@@ -383,12 +460,12 @@ def refine_phase(model: HWModel, y, phase: float, shaft_frequency: float, theta:
     period = fs / freq
     best, best_fit = phase, -np.inf
 
+    train = _Train(model.modulated, fs, freq, shaft_frequency, theta, c, model.pulse_width)
+
     def scan(center, half, step):
         nonlocal best, best_fit
         for d in np.arange(-half, half + 1e-9, step) / period * TWO_PI:
-            u = _train_for(model.modulated, n, fs, freq, center + d, shaft_frequency, theta, c,
-                           model.pulse_width)
-            fit = fit_percent(yy, model.simulate(u))
+            fit = fit_percent(yy, model.simulate(train.render(n, center + d)))
             if fit > best_fit:
                 best, best_fit = center + d, fit
 

@@ -103,7 +103,7 @@ def _recorded(src: str, args, bearing: Bearing | None):
             "sha256": _sha256(src) if Path(src).is_file() else None,
             "channel": rec.channel, "units_in_file": args.units or "g",
             "note": "derived model only; the recording itself is not part of the project"}
-    return y, rec.sample_rate, rec.rpm, bearing or load_bearing(DEFAULT_BEARING), prov
+    return y, rec.sample_rate, rec.rpm, bearing or rec.bearing or load_bearing(DEFAULT_BEARING), prov
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -26,14 +26,14 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from bearing_common.bearings import CATALOG, DEFAULT_BEARING, Bearing, load_bearing
+from bearing_common.bearings import CATALOG, DEFAULT_BEARING, Bearing
+from bearing_common.model_set_info import NONE, SHIPPED_SETS
 from bearing_common.states import parse_fault
 
 from .hw_model import FAULT_TYPES, HWModel, ModelFileError, load, same_bearing
 from .piecewise_linear import MonotonePiecewiseLinear
 
 MODELS_DIR = Path(__file__).resolve().parent / "models"
-NONE = "none"
 
 #: Time constant (s) of the impact response the ``none`` set assumes for its phase
 #: estimate: the energy of a ring-down of a few housing-resonance cycles (2-10 kHz).
@@ -65,15 +65,13 @@ class ModelSet:
     directory: Path | None
 
 
-SHIPPED = {s.name: s for s in (
-    ModelSet("sim_48k", 48000.0, "simulator", CATALOG["6205"], MODELS_DIR / "sim_48k"),
-    ModelSet("sim_12k", 12000.0, "simulator", CATALOG["6205"], MODELS_DIR / "sim_12k"),
-    ModelSet("cwru_de_6205", 12000.0, "cwru", CATALOG["6205"], MODELS_DIR / "cwru_de_6205"),
-)}
+#: The shipped sets (:data:`bearing_common.model_set_info.SHIPPED_SETS`) with their files.
+SHIPPED = {s.name: ModelSet(s.name, s.sample_rate, s.source, s.bearing, MODELS_DIR / s.name)
+           for s in SHIPPED_SETS.values()}
 NO_MODEL = ModelSet(NONE, None, None, None, None)
 
 
-def choose_model_set(source: str, sample_rate: float, bearing: Bearing | str | None,
+def choose_model_set(source: str, sample_rate: float, bearing: Bearing | None,
                      resample: bool = False) -> ModelSet:
     """The set for data from ``source`` at ``sample_rate`` (Hz) of a machine with ``bearing``.
 
@@ -81,7 +79,7 @@ def choose_model_set(source: str, sample_rate: float, bearing: Bearing | str | N
     ``resample`` (callers that resample the input to the set's rate) any rate will do:
     the lowest at or above ``sample_rate``, else the highest. Otherwise ``none``.
     """
-    bearing = load_bearing(bearing)
+    bearing = bearing or CATALOG[DEFAULT_BEARING]
     candidates = [s for s in SHIPPED.values()
                   if s.source == str(source).lower() and same_bearing(s.bearing, bearing)]
     exact = [s for s in candidates if math.isclose(s.sample_rate, float(sample_rate), rel_tol=1e-9)]
@@ -126,7 +124,7 @@ def available_model_sets(root=None) -> list[str]:
 
 
 def load_model_set(name: str, sample_rate: float | None = None, root=None,
-                   bearing: Bearing | str | None = None) -> dict[str, HWModel]:
+                   bearing: Bearing | None = None) -> dict[str, HWModel]:
     """The models of set ``name`` (see :func:`model_set`), by fault type.
 
     ``sample_rate`` (Hz), if given, must be the set's; ``none`` needs it and takes
@@ -146,7 +144,7 @@ def load_model_set(name: str, sample_rate: float | None = None, root=None,
     if entry.directory is None:
         if sample_rate is None:
             raise ModelFileError(f"model set {NONE!r} runs at the data's rate: give the sample rate")
-        b = load_bearing(bearing or DEFAULT_BEARING)
+        b = bearing or CATALOG[DEFAULT_BEARING]
         return {ft: passthrough_model(ft, sample_rate, b) for ft in FAULT_TYPES}
     return {ft: load(entry.directory / f"{ft}.json", sample_rate=sample_rate, fault_type=ft) for ft in FAULT_TYPES}
 

@@ -15,13 +15,14 @@ import numpy as np
 from rclpy.node import Node
 
 from bearing_common import topics
+from bearing_common.bearings import load_bearing
 from bearing_common.node_main import run_node_main
 from bearing_common.parameters import declare
 from bearing_common.stamps import to_seconds
 from bearing_common.states import parse_fault
 from bearing_msgs.msg import Residual, ShaftSpeed, VibrationChunk
 
-from .kernels import warm_up
+from .observer import warm_up
 from .observer_node_config import PARAMETERS, default_node_name
 from .observer_session import ObserverSession
 
@@ -33,7 +34,7 @@ class ObserverNode(Node):
         super().__init__(name, namespace=namespace)
         values = declare(self, PARAMETERS, lambda changed: self.session.configure(changed))
         fault = parse_fault(values["fault_type"])
-        self.session = ObserverSession(fault, values["bearing"], values["model_set"], values["rpm"],
+        self.session = ObserverSession(fault, load_bearing(values["bearing"]), values["model_set"], values["rpm"],
                                        values["speed_tolerance"], log=self.log)
         warm_up()  # compile or load the kernels now, not on the first chunks
         out = topics.residual_topic(fault)

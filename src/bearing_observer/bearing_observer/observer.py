@@ -16,9 +16,11 @@ with ``(A, B, C, D)`` a balanced realization of ``B(q)/F(q)`` (the pure delay ``
 applied to ``w`` by a carried sample buffer, not kept in the state vector). Substituting,
 ``z_hat`` is the output of one LTI system with two inputs, ``w`` and ``z_tilde``, and state
 matrix ``A - L C``. With ``L = 0`` that system is ``B/F`` driven by ``w`` alone, run as a
-difference equation (:func:`.kernels.iir_filter`); otherwise it is run in modal form (:class:`.realization.ModalFilter`,
-a compiled loop). Both carry their state between calls, so chunked processing equals
-one-shot processing, and no per-sample Python loop runs.
+difference equation (:func:`iir_filter`); otherwise it is run in modal form
+(:class:`.realization.ModalFilter`). Both carry their state between calls, so chunked
+processing equals one-shot processing, and no per-sample Python loop runs: both are
+compiled loops (numba), as is the train input (:func:`drive_input`); :func:`warm_up`
+compiles every kernel the observer runs.
 
 Observer gain (pole choice, :func:`.realization.observer_gain`): ``"model"`` (default,
 ``L = 0``: the model's own poles; white measurement noise passes with gain 1),
@@ -30,28 +32,17 @@ on its identification record, slip included) when the observer watches the beari
 model was identified for, else the watched bearing's kinematic order (eqs. 2.53-2.54) with a
 :class:`BearingMismatchWarning`.
 
-Online phase and amplitude of the train (the thesis assumes them known). Every
+Online phase and amplitude of the train (the thesis assumes them known): every
 ``update_interval`` seconds, at fixed sample counts (so results do not depend on how the
-stream is chunked), the observer looks at the last ``window`` seconds of
-``z_tilde = g^-1(y)``:
-
-1. *Phase*: ``z_tilde²`` folded over the fault period is circularly cross-correlated with the
-   fold of the model's squared unit-impulse response; the best lag is the impact phase.
-2. *Amplitude*: the model's responses to the unit train(s) at that phase are the regressors
-   of a least-squares fit of ``z_tilde`` (outer race: one regressor, eq. 2.55, gain clipped
-   at >= 0; inner race: the three components of eq. 2.58, cos / sin of the shaft angle and
-   constant, so the unknown shaft phase and offset are estimated too).
-3. *Significance*: the drive is used only when the fit explains at least ``min_explained``
-   of the window's energy (default 40 %). White noise explains about ``p/N`` ~ 1e-3
-   (``N`` window samples, ``p`` regressors); on the simulator (0.4 s, 48 kHz) the matching
-   observer explains 98 % and the other fault's observer 10-22 %, so 40 % keeps each
-   observer from injecting on the other fault; otherwise the drive is 0: in NORMAL
-   operation the observer injects no impulses of its own. On real CWRU data impacts
-   wander 0.1-0.7 ms from a strictly periodic train, the signed least-squares fit
-   explains little, and the drive is mostly off there (the phase still locks, see tests).
+stream is chunked), :class:`.phase_amplitude_estimator.PhaseAmplitudeEstimator` estimates
+them from the last ``window`` seconds of ``z_tilde = g^-1(y)`` (phase from a fold, gains
+from a least-squares fit of the model's responses, used only when they explain at least
+``min_explained`` of the window's energy: otherwise the drive is 0, the observer injects no
+impulses of its own). The trains come from :class:`.train_cache.TrainCache` (cycle
+coordinates from the speed anchor, rendered once per update interval).
 
 The estimates apply from the next update boundary on (causal, one update of delay).
-``drive="phase"`` stops after step 1: the train is published at the estimated phase and
+``drive="phase"`` stops after the phase: the train is published at the estimated phase and
 nothing is subtracted (residual = y); model set ``none`` runs that way.
 """
 
@@ -62,16 +53,19 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sp_fft
+from numba import njit
 
-from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.bearings import Bearing
 from bearing_common.states import parse_fault
 
 from .hw_model import HWModel, same_bearing
-from .impulse_trains import TWO_PI, impulse_train, modulated_train_components
-from .kernels import drive_input, fold_energy, iir_filter
+from .impulse_trains import TWO_PI, add_pulses
 from .model_sets import NONE, load_model_set
-from .realization import ModalFilter, balanced_realization, observer_gain
+from .noise_gain import analytic_noise_gain, measured_noise_gain
+from .phase_amplitude_estimator import PhaseAmplitudeEstimator, fold_energy
+from .piecewise_linear import interp_extended
+from .realization import ModalFilter, balanced_realization, observer_gain, run_modes
+from .train_cache import TrainCache
 
 
 @dataclass
@@ -131,9 +125,8 @@ class FaultObserver:
         Shaft speed (rev/min); default the model's.
     sample_rate : float, optional
         Hz; must equal the model's.
-    bearing : Bearing or str, optional
-        The watched bearing (anything :func:`bearing_common.bearings.load_bearing` reads);
-        default the model's. Its fault order is :func:`fault_order`'s: another bearing
+    bearing : Bearing, optional
+        The watched bearing; default the model's. Its fault order is :func:`fault_order`'s: another bearing
         than the model's gives a :class:`BearingMismatchWarning` and runs on.
     poles : "model" | "contracted" | array_like
         Observer pole choice (module docstring). Default ``"model"`` (L = 0).
@@ -158,7 +151,7 @@ class FaultObserver:
     """
 
     def __init__(self, model: HWModel, rpm: float | None = None, sample_rate: float | None = None,
-                 bearing: Bearing | str | None = None, poles="model", contraction: float = 0.95, window: float = 0.1,
+                 bearing: Bearing | None = None, poles="model", contraction: float = 0.95, window: float = 0.1,
                  update_interval: float = 0.1, min_explained: float = 0.4,
                  drive: str = "adaptive", phase: float | None = None, gains=None):
         if sample_rate is not None and not math.isclose(sample_rate, model.sample_rate, rel_tol=1e-9):
@@ -167,7 +160,7 @@ class FaultObserver:
         if drive not in ("adaptive", "phase", "off", "fixed"):
             raise ValueError("drive must be 'adaptive', 'phase', 'off' or 'fixed'")
         self.model = model
-        self.bearing = model.bearing if bearing is None else load_bearing(bearing)
+        self.bearing = model.bearing if bearing is None else bearing
         self.fault_order, mismatch = fault_order(model, None if bearing is None else self.bearing)
         if mismatch:
             warnings.warn(mismatch, BearingMismatchWarning, stacklevel=2)
@@ -190,19 +183,22 @@ class FaultObserver:
         k = max(model.b.size, model.f.size)
         self._iir = (np.pad(model.b, (0, k - model.b.size)) / model.f[0],
                      np.pad(model.f, (0, k - model.f.size)) / model.f[0])
-        self._template_cache = {}  # folded unit-impulse response energy (phase estimation)
+        self._estimator = PhaseAmplitudeEstimator(model, self.window_n, self.min_explained)
+        self._train = TrainCache(self.sample_rate, model.pulse_width, model.modulated,
+                                 plain_only=drive in ("phase", "off"), update_n=self.update_n)
         self._noise_gain = None
         self._fixed_phase = phase
         self._fixed_gains = None if gains is None else np.asarray(gains, dtype=float).ravel()
         if drive == "fixed" and (phase is None or gains is None):
             raise ValueError("drive='fixed' needs phase and gains")
+        self._n = 0  # samples processed since reset
         self.set_speed(model.rpm if rpm is None else rpm)
         self.reset()
 
     # ------------------------------------------------------------------------------------
     @classmethod
     def from_model_set(cls, set_name: str, fault_type: str, rpm: float | None = None,
-                       sample_rate: float | None = None, bearing: Bearing | str | None = None,
+                       sample_rate: float | None = None, bearing: Bearing | None = None,
                        root=None, **kwargs) -> FaultObserver:
         """Observer for ``fault_type`` from the model set ``set_name`` (:mod:`.model_sets`).
 
@@ -220,26 +216,21 @@ class FaultObserver:
     @property
     def fault_frequency(self) -> float:
         """Current impact frequency (Hz): :attr:`fault_order` × shaft frequency."""
-        return self._freq
+        return self._train.frequency
 
     @property
     def shaft_frequency(self) -> float:
         """Current shaft frequency (Hz)."""
-        return self._fr
+        return self._train.shaft_frequency
 
     def set_speed(self, rpm: float) -> None:
         """Set the shaft speed (rev/min); the train's phase stays continuous."""
         rpm = float(rpm)
         if not (math.isfinite(rpm) and rpm > 0):
             raise ValueError(f"rpm must be finite and > 0, got {rpm!r}")
-        if hasattr(self, "_n"):
-            # re-anchor the cycle coordinates at the current sample: phase continuity
-            self._psi_base, self._chi_base = self._cycles(self._n)
-            self._n_base = self._n
         self.rpm = rpm
-        self._cached_trains = None
-        self._fr = rpm / 60.0
-        self._freq = self.fault_order * self._fr
+        fr = rpm / 60.0
+        self._train.set_speed(self._n, self.fault_order * fr, fr)
 
     def reset(self) -> None:
         """Zero the observer state and forget the phase/amplitude estimates."""
@@ -247,33 +238,22 @@ class FaultObserver:
             self._modal.reset()
         self._zi_tf = np.zeros(self._iir[0].size - 1)
         self._delay_buf = np.zeros(self.model.nk)
-        self._n = 0                      # samples processed since reset
-        # Cycle coordinates (fault psi, shaft chi, in cycles) are computed from the absolute
-        # sample count since the last speed change, so any chunking gives identical values.
-        self._n_base = 0
-        self._psi_base = 0.0
-        self._chi_base = 0.0
-        self._win_z = np.zeros(0)        # recent z_tilde
+        self._n = 0
+        self._train.reset()
+        self._estimator.reset()
         if self.drive_mode == "fixed":
-            self._phase_c = float(-self._fixed_phase / TWO_PI) % 1.0
+            self._train.set_phase(float(-self._fixed_phase / TWO_PI) % 1.0)
             self._set_gains(self._fixed_gains.copy())
         else:
-            self._phase_c = 0.0          # impact cycle position estimate (cycles)
+            self._train.set_phase(0.0)
             self._set_gains(np.zeros(3 if self.model.modulated else 1))
-        self.explained = 0.0
-        self._cached_trains = None
+        self.explained = 0.0  #: energy fraction the last amplitude fit explained
 
     @property
     def phase(self) -> float:
         """Estimated fault phase (rad) at the next sample: impacts where
         ``f t + phase / (2 pi)`` is an integer, ``t`` measured from the next sample."""
-        return float(np.mod(TWO_PI * (self._cycles(self._n)[0] - self._phase_c), TWO_PI))
-
-    def _cycles(self, n_abs):
-        """Fault and shaft cycle positions (cycles, in [0, 1)) at absolute sample(s) n_abs."""
-        t = (np.asarray(n_abs) - self._n_base) / self.sample_rate
-        return (np.mod(self._psi_base + self._freq * t, 1.0),
-                np.mod(self._chi_base + self._fr * t, 1.0))
+        return float(np.mod(TWO_PI * (self._train.cycles(self._n)[0] - self._train.phase_c), TWO_PI))
 
     @property
     def gains(self) -> np.ndarray:
@@ -281,108 +261,21 @@ class FaultObserver:
         return self._gains.copy()
 
     # ------------------------------------------------------------------------------------
-    def _trains(self, n: int, n_start: int, plain_only: bool = False):
-        """Unit plain train and regressor trains for ``n`` samples from absolute sample
-        ``n_start`` (impact times from the speed anchor: independent of block boundaries)."""
-        fs = self.sample_rate
-        ph = TWO_PI * (self._psi_base - self._phase_c)
-        i0 = int(n_start - self._n_base)
-        if self.model.modulated and not plain_only:
-            comps = modulated_train_components(n, fs, self._freq, ph, start_index=i0,
-                                               shaft_frequency=self._fr,
-                                               shaft_phase=TWO_PI * self._chi_base,
-                                               pulse_width=self.model.pulse_width)
-            return comps[2], comps
-        unit = impulse_train(n, fs, self._freq, ph, start_index=i0,
-                             pulse_width=self.model.pulse_width)
-        return unit, unit[None, :]
-
-    def _cache_trains(self, n_start: int, n_end: int) -> None:
-        """Render the trains (see :meth:`_trains`) for absolute sample indices
-        ``[n_start, n_end)`` in one call and keep them for the blocks up to the next update
-        boundary (phase and speed are constant there; a speed change drops the cache).
-        Pulse positions are computed per sample from the speed anchor, so a slice equals
-        the block rendered on its own (to rounding of the sub-sample position, ~1e-12) and
-        does not depend on how the stream is chunked."""
-        plain_only = self.drive_mode in ("phase", "off")
-        self._cached_trains = (n_start, n_end) + self._trains(n_end - n_start, n_start, plain_only)
-
-    def _block_trains(self, n: int):
-        """Unit train and regressor trains (see :meth:`_trains`) for the next ``n`` samples,
-        which never cross an update boundary."""
-        c = self._cached_trains
-        if c is None or not (c[0] <= self._n and self._n + n <= c[1]):
-            self._cache_trains(self._n, (self._n // self.update_n + 1) * self.update_n)
-            c = self._cached_trains
-        i = self._n - c[0]
-        return c[2][i:i + n], c[3][:, i:i + n]
-
-    def _template_spectrum(self, n_bins: int):
-        """FFT length and conjugate spectrum of the zero-padded template fold (cached)."""
-        key = (n_bins, self._freq)
-        if key not in self._template_cache:
-            if len(self._template_cache) > 16:
-                self._template_cache.clear()
-            n_fft = sp_fft.next_fast_len(2 * n_bins, real=True)
-            self._template_cache[key] = (
-                n_fft, np.conj(sp_fft.rfft(self._make_template(n_bins), n_fft)))
-        return self._template_cache[key]
-
-    def _make_template(self, n_bins: int) -> np.ndarray:
-        period = self.sample_rate / self._freq
-        n = int(math.ceil(period))
-        imp = np.zeros(n)
-        imp[0] = 1.0
-        h2 = self.model.simulate_linear(imp) ** 2
-        pos = np.arange(n) / period
-        idx = np.minimum((pos * n_bins).astype(np.int64), n_bins - 1)
-        return np.bincount(idx, weights=h2, minlength=n_bins)
-
     def _update_estimates(self) -> None:
-        z = self._win_z
-        if z.size < self.window_n // 2:
+        """Phase, then (``drive="adaptive"``) gains, from the estimator's window, which ends
+        at the current sample (an update boundary)."""
+        est, train = self._estimator, self._train
+        if not est.ready:
             return
-        period = self.sample_rate / self._freq
-        # two bins per sample of the period: every bin gets samples (another count leaves a
-        # beat pattern of empty bins that the one-period template does not share)
-        n_bins = int(min(1024, max(16, round(2 * period))))
-        # fault cycle position of the window's samples (from the speed anchor; exact while
-        # the speed is constant over the window)
-        prof = fold_energy(z, self._n - z.size - self._n_base, self._psi_base, self._freq,
-                           self.sample_rate, n_bins)
-        # circular cross-correlation with the template, as the wrapped linear correlation
-        # at a fast FFT length >= 2 n_bins (n_bins itself is often a large prime)
-        n_fft, tmpl_f = self._template_spectrum(n_bins)
-        lin = sp_fft.irfft(sp_fft.rfft(prof - prof.mean(), n_fft) * tmpl_f, n_fft)
-        corr = lin[:n_bins] + lin[n_fft - n_bins:]
-        lag = int(np.argmax(corr))
-        # sub-bin refinement: vertex of the parabola through the peak and its neighbours
-        c0, cm, cp = corr[lag], corr[lag - 1], corr[(lag + 1) % n_bins]
-        den = cm - 2.0 * c0 + cp
-        frac = 0.5 * (cm - cp) / den if den < 0 else 0.0
-        self._phase_c = ((lag + min(max(float(frac), -0.5), 0.5)) / n_bins) % 1.0
+        first = self._n - est.window.size
+        train.set_phase(est.phase(first - train.n_base, train.psi_base, train.frequency))
         if self.drive_mode == "phase":
-            self._cached_trains = None  # rendered again at the new phase
-            return
-        # regressors over the window (zero state at the window start; first part discarded);
-        # the trains are rendered through the next update interval in the same call
-        self._cache_trains(self._n - z.size, self._n + self.update_n)
-        R = self.model.simulate_linear(self._cached_trains[3][:, :z.size])  # one row per regressor
-        skip = min(z.size // 4, int(round(period)))
-        Rw, zw = R[:, skip:], z[skip:]      # one regressor per row (contiguous rows)
-        # normal equations (p <= 3 regressors), ridge-regularised at 1e-9 of the trace
-        G = Rw @ Rw.T
-        r = Rw @ zw
-        ridge = 1e-9 * max(float(np.trace(G)), 1e-300) * np.eye(G.shape[0])
-        p = np.linalg.solve(G + ridge, r)
-        if not self.model.modulated:
-            p = np.maximum(p, 0.0)
-        # explained energy 1 - |zw - p Rw|^2 / |zw|^2, the residual energy expanded as
-        # |zw|^2 - 2 p.r + p G p (no pass over the samples)
-        e = float(zw @ zw)
-        res_energy = max(e - 2.0 * float(p @ r) + float(p @ G @ p), 0.0)
-        self.explained = 1.0 - res_energy / e if e > 0 else 0.0
-        self._set_gains(p if self.explained >= self.min_explained else np.zeros_like(p))
+            return  # the trains are rendered again at the new phase
+        # the regressors over the window; the trains are rendered through the next update
+        # interval in the same call
+        _, trains = train.render(first, self._n + self.update_n)
+        gains, self.explained = est.fit(trains[:, :est.window.size], train.frequency)
+        self._set_gains(gains)
 
     def _set_gains(self, gains: np.ndarray) -> None:
         """Train gains from now on; the drive is on when any is non-zero (and not ``drive="off"``)."""
@@ -394,7 +287,7 @@ class FaultObserver:
         g = self.model.output_nonlinearity
         f = self.model.input_nonlinearity
         z_t = g.inverse(y)
-        unit, comps = self._block_trains(n)
+        unit, comps = self._train.block(self._n, n)
         u, w, zhat = out_drive[sl], np.empty(n), np.empty(n)
         # w = q^-nk f(u) while the drive is on, else 0 (nothing injected)
         drive_input(comps, self._gains, self._driving, f.x, f.y, f.slopes, self._delay_buf, u, w)
@@ -409,8 +302,7 @@ class FaultObserver:
         # bookkeeping: sample count and the estimation window
         self._n += n
         if self.drive_mode in ("adaptive", "phase"):
-            W = self.window_n
-            self._win_z = np.concatenate([self._win_z, z_t])[-W:]
+            self._estimator.push(z_t)
             if self._n % self.update_n == 0:
                 self._update_estimates()
 
@@ -452,31 +344,113 @@ class FaultObserver:
     # ------------------------------------------------------------------------------------
     @property
     def noise_gain(self) -> float:
-        """Measured white-noise gain of the residual filter: RMS(residual) / RMS(noise).
-
-        Seeded white Gaussian noise (RMS 1e-3 of the output nonlinearity's first breakpoint
-        span, i.e. in g's local linear range) is run through a fresh copy of this observer
-        with the train input off; 1.0 for ``poles="model"`` (L = 0).
-        """
+        """Measured white-noise gain of the residual filter: RMS(residual) / RMS(noise)
+        (:func:`.noise_gain.measured_noise_gain`, on a fresh copy of this observer with the
+        train input off); 1.0 for ``poles="model"`` (L = 0)."""
         if self._noise_gain is None:
-            clone = FaultObserver(self.model, rpm=self.rpm, poles=self.poles_choice,
-                                  contraction=self._contraction, drive="off")
-            gx = self.model.output_nonlinearity
-            sigma = 1e-3 * float(np.max(np.abs(gx.y)))
-            rng = np.random.default_rng(12345)
-            n = int(max(20000, 0.5 * self.sample_rate))
-            v = sigma * rng.standard_normal(n)
-            r = clone.process(v).residual
-            skip = n // 10
-            self._noise_gain = float(np.sqrt(np.mean(r[skip:] ** 2)) / np.sqrt(np.mean(v[skip:] ** 2)))
+            self._noise_gain = measured_noise_gain(FaultObserver(
+                self.model, rpm=self.rpm, poles=self.poles_choice, contraction=self._contraction, drive="off"))
         return self._noise_gain
 
     def noise_gain_analytic(self, n: int = 1 << 16) -> float:
-        """H2 norm of the linearised map ``z_tilde -> z_tilde - z_hat`` (impulse response)."""
-        if self._modal is None:
-            return 1.0
-        imp = np.zeros(n)
-        imp[0] = 1.0
-        f = ModalFilter(self.A - self.L @ self.C, self.B - self.L @ self.D, self.L, self.C, self.D)
-        h = imp - f.run(np.zeros(n), imp)
-        return float(np.sqrt(np.sum(h * h)))
+        """H2 norm of the linearised map ``z_tilde -> z_tilde - z_hat`` (:func:`.noise_gain.analytic_noise_gain`)."""
+        return analytic_noise_gain(self.A, self.B, self.C, self.D, self.L, n)
+
+
+def warm_up() -> None:
+    """Compile (first run after an install) or load from numba's cache every kernel the
+    observer runs, with the argument types it passes. A node calls this before it
+    subscribes, so that no chunk waits for a compile (about a second per kernel) and its
+    queue never overflows."""
+    z = np.zeros(8)
+    out = np.zeros(8)
+    add_pulses(np.zeros((2, 8)), np.array([1.5]), np.array([2.5]), np.ones((2, 1)), 2)
+    interp_extended(np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), np.array([1.0]), z, out)
+    fold_energy(z, 0, 0.0, 100.0, 48000.0, 4)
+    f = (np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), np.array([1.0]))
+    for comps in (np.zeros((1, 8)), np.zeros((3, 16))[:, 4:12]):  # the train cache's slices: either layout
+        drive_input(comps, np.ones(comps.shape[0]), True, *f, np.zeros(1), z, out)
+    iir_filter(np.ones(2), np.ones(2), z, np.zeros(1), out)
+    modes = np.zeros(1, dtype=complex)
+    run_modes(modes, modes, modes, modes, np.ones(1), 0.0, z, z, np.zeros(1, dtype=complex), out)
+
+
+# compiled inner loops (numba; strict IEEE arithmetic, no fastmath)
+@njit(cache=True)
+def drive_input(comps: np.ndarray, gains: np.ndarray, active: bool, x: np.ndarray, y: np.ndarray,
+                slopes: np.ndarray, delay: np.ndarray, u: np.ndarray, w: np.ndarray) -> None:
+    """The observer's train input: ``u = gains @ comps``, ``w = q^-nk f(u)`` (thesis Fig. 3.1).
+
+    ``u[i] = sum_j gains[j] comps[j, i]`` (in order of ``j``), ``f`` the piecewise-linear
+    input nonlinearity of :func:`.piecewise_linear.interp_extended` through ``(x, y)``, and the pure delay of
+    ``nk = delay.size`` samples: ``w[i] = delay[i]`` for ``i < nk``, ``f(u[i - nk])`` after;
+    ``delay`` then holds the last ``nk`` values of ``f(u)`` for the next block. Not
+    ``active`` (the drive off): ``u = 0`` and ``f(u)`` counts as 0, nothing is injected.
+
+    Parameters
+    ----------
+    comps : ndarray, shape (p, n)
+        Unit regressor trains (dimensionless).
+    gains : ndarray, shape (p,)
+        Train gains (units of ``u``).
+    x, y, slopes : ndarray
+        Breakpoints and segment slopes of ``f`` (see :func:`.piecewise_linear.interp_extended`).
+    delay : ndarray, shape (nk,)
+        ``f(u)`` of the last ``nk`` samples of the previous block; updated in place.
+    u, w : ndarray, shape (n,)
+        Drive and delayed nonlinear input, written in place.
+    """
+    n = u.size
+    nk = delay.size
+    last = x.size - 2
+    j = 0
+    fu = np.zeros(n)
+    for i in range(n if active else 0):
+        acc = 0.0
+        for k in range(gains.size):
+            acc += gains[k] * comps[k, i]
+        u[i] = acc
+        while j > 0 and acc < x[j]:
+            j -= 1
+        while j < last and acc >= x[j + 1]:
+            j += 1
+        fu[i] = slopes[j] * (acc - x[j]) + y[j]
+    if not active:
+        u[:] = 0.0
+    for i in range(n):
+        w[i] = delay[i] if i < nk else fu[i - nk]
+    if nk:
+        if n >= nk:
+            delay[:] = fu[n - nk:]
+        else:
+            delay[:nk - n] = delay[n:].copy()
+            delay[nk - n:] = fu
+
+
+@njit(cache=True)
+def iir_filter(b: np.ndarray, a: np.ndarray, x: np.ndarray, zi: np.ndarray, out: np.ndarray) -> None:
+    """``B(q)/A(q)`` applied to ``x`` in transposed direct form II, state carried in ``zi``.
+
+    The recursion of ``scipy.signal.lfilter(b, a, x, zi=zi)``: ``b`` and ``a`` of equal length
+    ``K >= 2`` (zero-padded), ``a[0] = 1``; ``out[i] = zi[0] + b[0] x[i]``, then
+    ``zi[k] = zi[k + 1] + b[k + 1] x[i] - a[k + 1] out[i]`` (``zi[K - 1]`` counting as 0).
+
+    Parameters
+    ----------
+    b, a : ndarray, shape (K,)
+        Numerator and denominator, ``a[0] = 1``.
+    x : ndarray, shape (n,)
+        Input.
+    zi : ndarray, shape (K - 1,)
+        Filter state; updated in place.
+    out : ndarray, shape (n,)
+        Output, written in place.
+    """
+    m = zi.size
+    for i in range(x.size):
+        xi = x[i]
+        yi = zi[0] + b[0] * xi
+        for k in range(m - 1):
+            zi[k] = zi[k + 1] + b[k + 1] * xi - a[k + 1] * yi
+        zi[m - 1] = b[m] * xi - a[m] * yi
+        out[i] = yi

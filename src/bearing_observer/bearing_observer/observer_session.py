@@ -8,7 +8,7 @@ One :class:`ObserverSession` per node:
   rate change or when ``bearing`` / ``model_set`` are set (:meth:`configure`);
 * re-tunes the train to shaft-speed messages that differ by more than
   ``speed_tolerance`` (relative), phase kept continuous;
-* checks every chunk (:class:`.chunk_stream.ChunkStream`): bad chunks are rejected and
+* checks every chunk (:class:`bearing_common.chunk_stream.ChunkStream`): bad chunks are rejected and
   counted; a gap or a restarted producer resets the observer state;
 * never returns a non-finite value.
 
@@ -27,10 +27,10 @@ import numpy as np
 
 from bearing_common import topics
 from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.chunk_stream import ChunkStream
 from bearing_common.log_throttle import LogThrottle
 from bearing_common.states import FaultState
 
-from .chunk_stream import ChunkStream
 from .hw_model import ModelFileError
 from .model_sets import choose_model_set
 from .observer import BearingMismatchWarning, FaultObserver
@@ -58,8 +58,8 @@ class ObserverSession:
     ----------
     fault : FaultState
         OUTER_RACE or INNER_RACE.
-    bearing : Bearing or str
-        The watched bearing (:func:`bearing_common.bearings.load_bearing`).
+    bearing : Bearing
+        The watched bearing (a ``bearing`` parameter change is parsed by :meth:`configure`).
     model_set : str
         A set name or directory; ``""`` = chosen from each chunk's source and rate.
     rpm : float
@@ -74,11 +74,11 @@ class ObserverSession:
         Seconds (monotonic clock) between two messages of one repeatable kind.
     """
 
-    def __init__(self, fault: FaultState, bearing: Bearing | str, model_set: str = "", rpm: float = 1800.0,
+    def __init__(self, fault: FaultState, bearing: Bearing, model_set: str = "", rpm: float = 1800.0,
                  speed_tolerance: float = 1e-3, stream_name: str = topics.VIBRATION.name, log=_quiet,
                  log_period: float = 5.0):
         self.fault = FaultState(fault)
-        self.bearing = load_bearing(bearing)
+        self.bearing = bearing
         self.model_set = model_set
         self.rpm = float(rpm)
         self.speed_tolerance = float(speed_tolerance)

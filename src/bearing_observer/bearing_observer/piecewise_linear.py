@@ -11,8 +11,7 @@ same), so both the function and its inverse are defined on the whole real line.
 from __future__ import annotations
 
 import numpy as np
-
-from .kernels import interp_extended
+from numba import njit
 
 
 class MonotonePiecewiseLinear:
@@ -91,3 +90,36 @@ def _evaluate(x, y, slopes, v) -> np.ndarray:
     out = np.empty(v.shape)
     interp_extended(x, y, slopes, np.ascontiguousarray(v).reshape(-1), out.reshape(-1))
     return out
+
+
+# compiled inner loop (numba; strict IEEE arithmetic, no fastmath)
+@njit(cache=True)
+def interp_extended(x: np.ndarray, y: np.ndarray, slopes: np.ndarray, v: np.ndarray,
+                    out: np.ndarray) -> None:
+    """Piecewise-linear interpolation through ``(x, y)``, extended with the end slopes.
+
+    ``out[i] = slopes[j] * (v[i] - x[j]) + y[j]`` with ``j`` the segment of ``v[i]``
+    (clamped to the first / last segment outside ``[x[0], x[-1]]``): the formula of
+    ``np.interp`` inside the breakpoints. The segment search starts from the previous
+    sample's segment, so smooth signals cost O(1) per sample.
+
+    Parameters
+    ----------
+    x, y : ndarray, shape (m,), m >= 2
+        Breakpoints, ``x`` strictly increasing.
+    slopes : ndarray, shape (m - 1,)
+        ``(y[j + 1] - y[j]) / (x[j + 1] - x[j])``.
+    v : ndarray, shape (n,)
+        Points to evaluate (NaN gives NaN).
+    out : ndarray, shape (n,)
+        Result, written in place.
+    """
+    last = x.size - 2
+    j = 0
+    for i in range(v.size):
+        vi = v[i]
+        while j > 0 and vi < x[j]:
+            j -= 1
+        while j < last and vi >= x[j + 1]:
+            j += 1
+        out[i] = slopes[j] * (vi - x[j]) + y[j]

@@ -27,9 +27,8 @@ circle (ValueError otherwise).
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from scipy import linalg, signal
-
-from .kernels import run_modes
 
 
 class ModalFilter:
@@ -37,7 +36,7 @@ class ModalFilter:
 
     ``x[n+1] = Ao x[n] + Bw w[n] + Bz z[n]``, ``out[n] = C x[n] + D w[n]`` with
     ``Ao = V diag(lam) V^-1``: each mode ``xi_i[n+1] = lam_i xi_i[n] + v_i[n]`` (one complex
-    mode per conjugate pair) runs in the compiled :func:`~bearing_observer.kernels.run_modes`,
+    mode per conjugate pair) runs in the compiled :func:`run_modes`,
     its state carried between calls. No transfer-function polynomials are formed (they are
     badly conditioned for poles near z = 1).
     """
@@ -182,3 +181,38 @@ def _place(A, C, p):
     if np.any(np.abs(p) >= 1.0):
         raise ValueError("requested observer poles must lie strictly inside the unit circle")
     return np.asarray(control.place(A.T, C.T, p)).T
+
+
+# compiled inner loop (numba; strict IEEE arithmetic, no fastmath)
+@njit(cache=True)
+def run_modes(lam: np.ndarray, bw: np.ndarray, bz: np.ndarray, c: np.ndarray,
+              weight: np.ndarray, d: float, w: np.ndarray, z: np.ndarray,
+              state: np.ndarray, out: np.ndarray) -> None:
+    """Two-input LTI filter in modal form, state carried in ``state``.
+
+    Per mode ``m``: ``xi_m[n+1] = lam[m] xi_m[n] + bw[m] w[n] + bz[m] z[n]``; output
+    ``out[n] = d w[n] + sum_m weight[m] Re(c[m] xi_m[n])`` (one complex mode stands for a
+    conjugate pair with ``weight`` 2).
+
+    Parameters
+    ----------
+    lam, bw, bz, c : ndarray of complex, shape (M,)
+        Mode poles, input and output coefficients.
+    weight : ndarray, shape (M,)
+        1 for real modes, 2 for conjugate pairs.
+    d : float
+        Direct feed-through of ``w``.
+    w, z : ndarray, shape (n,)
+        The two inputs.
+    state : ndarray of complex, shape (M,)
+        Mode states at the first sample; updated in place to the state after the last.
+    out : ndarray, shape (n,)
+        Output, written in place.
+    """
+    for i in range(w.size):
+        acc = d * w[i]
+        for m in range(lam.size):
+            s = state[m]
+            acc += weight[m] * (c[m] * s).real
+            state[m] = lam[m] * s + bw[m] * w[i] + bz[m] * z[i]
+        out[i] = acc

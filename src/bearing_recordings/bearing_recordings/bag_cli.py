@@ -79,7 +79,7 @@ def _say(text: str) -> None:
 
 def info_lines(bag_dir) -> list:
     """``bearing-bag info`` output lines (raises BagError)."""
-    from .bag_read import bag_bearing, bag_namespace_hint, bag_storage, open_bag
+    from .bag_read import bag_bearing_spec, bag_namespace_hint, bag_storage, open_bag
     lines = []
     with open_bag(bag_dir) as reader:
         count = reader.message_count
@@ -90,8 +90,8 @@ def info_lines(bag_dir) -> list:
         ns = bag_namespace_hint(bag_dir)
         if ns is not None:
             lines.append(f"namespace:  {'/' + ns if ns else '/ (root)'}")
-        if bag_bearing(bag_dir):
-            lines.append(f"bearing:    {bag_bearing(bag_dir)}")
+        if bag_bearing_spec(bag_dir):
+            lines.append(f"bearing:    {bag_bearing_spec(bag_dir)}")
         lines.append(f"duration:   {duration:.3f} s")
         if count:
             lines.append(f"start:      {start * 1e-9:.9f} s")

@@ -25,11 +25,12 @@ from pathlib import Path
 import numpy as np
 
 from bearing_common import topics
+from bearing_common.bearings import Bearing, BearingError, load_bearing
 from bearing_common.stamps import to_seconds
 from bearing_common.units import sample_rate_problem
 
 from .bag_types import CUSTOM_BEARING, CUSTOM_NAMESPACE, BagError, project_typestore
-from .recording import MAX_SAMPLES, Recording
+from .recording import MAX_SAMPLES, MEASURED_RPM_TOLERANCE, Recording
 
 LOG = logging.getLogger(__name__)
 
@@ -233,9 +234,21 @@ def bag_namespace_hint(path) -> str | None:
     return _custom(path, CUSTOM_NAMESPACE)
 
 
-def bag_bearing(path) -> str:
-    """The bearing ``bearing-bag from-mat`` stored in the bag's custom_data, else ""."""
+def bag_bearing_spec(path) -> str:
+    """The bearing description ``bearing-bag from-mat`` stored in the bag's custom_data, else ""."""
     return _custom(path, CUSTOM_BEARING) or ""
+
+
+def bag_bearing(path) -> Bearing | None:
+    """The bearing ``bearing-bag from-mat`` stored in the bag (:func:`bag_bearing_spec`), else None;
+    BagError when what is stored is not a bearing."""
+    spec = bag_bearing_spec(path)
+    if not spec:
+        return None
+    try:
+        return load_bearing(spec)
+    except BearingError as exc:
+        raise BagError(f"{path}: the bearing stored in the bag is not usable: {exc}") from None
 
 
 def read_bag(path, namespace: str | None = None, vibration_topic: str = topics.VIBRATION.name) -> BagContents:
@@ -400,4 +413,4 @@ def load_bag(path, channel: str | None = None, namespace: str | None = None) -> 
     truth = truth_per_sample(contents.truth, stream.start_time, stream.samples.size, stream.sample_rate)
     return Recording(stream.samples, stream.sample_rate, contents.rpm, stream.source, truth,
                      channel or topics.VIBRATION.name, str(path), start_time=stream.start_time,
-                     bearing=bag_bearing(path))
+                     bearing=bag_bearing(path), rpm_tolerance=None if contents.rpm is None else MEASURED_RPM_TOLERANCE)

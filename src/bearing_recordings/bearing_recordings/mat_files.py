@@ -30,9 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
+from bearing_common.bearings import CATALOG
 from bearing_common.units import STANDARD_GRAVITY
 
-from .recording import InputError, Recording, check_rate, check_rpm, check_samples
+from .recording import MEASURED_RPM_TOLERANCE, InputError, Recording, check_rate, check_rpm, check_samples
 
 _CWRU_CHANNEL = re.compile(r"X(\d+)_(DE|FE|BA)_time")
 _CWRU_RPM = re.compile(r"X(\d+)RPM")
@@ -175,7 +176,8 @@ def _load_mfpt(path, struct, sample_rate, rpm, channel) -> Recording:
     fs = check_rate(sample_rate if sample_rate is not None else _scalar(rec["sr"], "bearing.sr", path))
     speed = check_rpm(rpm) if rpm is not None else check_rpm(60.0 * _scalar(rec["rate"], "bearing.rate", path))
     x = check_samples(rec[ch], f"{path}:bearing.{ch}") * STANDARD_GRAVITY
-    return Recording(x, fs, speed, "mfpt", None, ch, str(path), bearing="mfpt")
+    return Recording(x, fs, speed, "mfpt", None, ch, str(path), bearing=CATALOG["mfpt"],
+                     rpm_tolerance=None if rpm is not None else MEASURED_RPM_TOLERANCE)
 
 
 def _cwru_record(path, keys) -> str:
@@ -207,7 +209,9 @@ def _load_cwru(path, m, keys, sample_rate, rpm, channel) -> Recording:
         key = f"X{rec.group(1)}RPM" if rec else None
         speed = check_rpm(_scalar(m[key], key, path)) if key in m else None
     x = check_samples(m[channel], f"{path}:{channel}") * STANDARD_GRAVITY
-    return Recording(x, fs, speed, "cwru", None, channel, str(path), bearing="6203" if "_FE_" in channel else "6205")
+    return Recording(x, fs, speed, "cwru", None, channel, str(path),
+                     bearing=CATALOG["6203" if "_FE_" in channel else "6205"],
+                     rpm_tolerance=MEASURED_RPM_TOLERANCE if rpm is None and speed is not None else None)
 
 
 def _load_single(path, m, keys, sample_rate, rpm, channel, units) -> Recording:

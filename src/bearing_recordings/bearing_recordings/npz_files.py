@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .recording import InputError, Recording, check_rate, check_rpm, check_samples
+from .recording import MEASURED_RPM_TOLERANCE, InputError, Recording, check_rate, check_rpm, check_samples
 
 
 def load_npz(path, sample_rate: float | None = None, rpm: float | None = None,
@@ -26,6 +26,7 @@ def load_npz(path, sample_rate: float | None = None, rpm: float | None = None,
     if fs is None:
         raise InputError(f"{path}: no sample_rate in the file; give --sample-rate")
     fs = check_rate(fs)
+    told = rpm is not None
     if rpm is None and "rpm" in data and data["rpm"].size == 1:
         rpm = data["rpm"].item()
     x = check_samples(data[ch], f"{path}:{ch}")
@@ -33,4 +34,5 @@ def load_npz(path, sample_rate: float | None = None, rpm: float | None = None,
     if truth is not None and (truth.size != x.size or truth.dtype.kind not in "iu"):
         truth = None
     return Recording(x, fs, None if rpm is None else check_rpm(rpm), "simulator",
-                     None if truth is None else truth.astype(int).ravel(), ch, str(path))
+                     None if truth is None else truth.astype(int).ravel(), ch, str(path),
+                     rpm_tolerance=None if told or rpm is None else MEASURED_RPM_TOLERANCE)

@@ -11,10 +11,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bearing_common.bearings import Bearing
 from bearing_common.units import sample_rate_problem
 
 #: Longest recording a loader accepts (samples): 1 hour at 100 kHz (2.9 GB as float64).
 MAX_SAMPLES = 360_000_000
+
+
+#: Relative accuracy of a shaft speed a rig measured and stored with its recording.
+MEASURED_RPM_TOLERANCE = 0.02
 
 
 class InputError(ValueError):
@@ -46,9 +51,13 @@ class Recording:
         to the first sample.
     notes : list of str
         What the loader assumed (units, speed), for the user's log.
-    bearing : str
-        The bearing the recording monitors, when the file says (a catalog name or
-        description: MFPT files, the CWRU channel's end, bags written by ``bearing-bag``), else "".
+    bearing : Bearing or None
+        The bearing the recording monitors, when the file says (MFPT files, the CWRU
+        channel's end, bags written by ``bearing-bag``), parsed by the loader; else None.
+    rpm_tolerance : float or None
+        Relative accuracy of ``rpm`` as the file states it: :data:`MEASURED_RPM_TOLERANCE` for a
+        speed the rig measured (CWRU's, MFPT's, a bag's ``shaft_speed``, the simulator's); None
+        for a speed from the user or a label (the decision then assumes a nameplate's).
     """
 
     accel: np.ndarray
@@ -60,7 +69,8 @@ class Recording:
     path: str = ""
     start_time: float = 0.0
     notes: list | None = None
-    bearing: str = ""
+    bearing: Bearing | None = None
+    rpm_tolerance: float | None = None
 
     @property
     def duration(self) -> float:

@@ -2,9 +2,9 @@
 
 What the node does between ROS and the decision core:
 
-* every residual chunk passes :class:`bearing_observer.chunk_stream.ChunkStream` (empty, huge,
+* every residual chunk passes :class:`bearing_common.chunk_stream.ChunkStream` (empty, huge,
   non-finite, wrong-rate, out-of-order chunks are rejected and counted);
-* restart rule: the decision core (:class:`.decision.Diagnoser`) restarts when a stream that
+* restart rule: the decision core (:class:`.diagnoser.Diagnoser`) restarts when a stream that
   already fed it restarts (a restarted observer or sensor: index back to 0, a new rate) —
   its stream is then a new one —, when the residuals name another model set (observers
   reconfigured), or when a parameter that shapes the decision changes;
@@ -12,7 +12,7 @@ What the node does between ROS and the decision core:
   (stamp of sample index 0 + index / rate), never from arrival;
 * health: the /diagnostics level and key-values — STALE when no residual arrived within
   the stale timeout, WARN when one observer is silent, when the sensor signal is unusable
-  (:mod:`.sensor_health`), when a real machine's shaft speed is unknown (estimated blind
+  (:mod:`.decision.sensor_health`), when a real machine's shaft speed is unknown (estimated blind
   from the vibration, which misses most faults: ``bearing-accuracy`` ablation) or the state
   is UNKNOWN, ERROR for a fault, OK for NORMAL —, named ``bearing_monitor/<motor>/drive_end``
   with the motor as hardware id, so that ``diagnostic_aggregator`` groups a fleet's statuses
@@ -28,17 +28,19 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bearing_common import topics
-from bearing_common.bearings import load_bearing
+from bearing_common.bearings import Bearing, load_bearing
+from bearing_common.chunk_stream import ChunkStream
 from bearing_common.log_throttle import LogThrottle
+from bearing_common.model_set_info import SHIPPED_SETS
 from bearing_common.states import FaultState
-from bearing_observer.chunk_stream import ChunkStream
-from bearing_observer.model_sets import SHIPPED
 
-from . import kernels, significance
-from .decision import STREAMS, Diagnoser
-from .decision_config import MODEL_SET_DEFAULTS, config_for
+from .decision.config import DiagnoserConfig
+from .decision.scores import WindowScores
+from .decision.state_tracker import Decision
+from .diagnoser import STREAMS, Diagnoser
 from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL
-from .state_tracker import Decision
+from .front_ends import MODEL_SET_DEFAULTS, config_for
+from .warm_up import warm_up
 
 #: Fastest plausible shaft (rev/min): anything above is a broken speed source.
 MAX_RPM = 1e6
@@ -70,7 +72,7 @@ class StateReport:
     confidence: float
     stamp: float
     onset: float
-    scores: dict
+    scores: WindowScores
     model_set: str
     detail: str
     changed: bool
@@ -96,12 +98,23 @@ class DiagnoserSession:
     log : callable(level, text)
         Where to say what happened (``"info"``, ``"warning"``); repeatable per-chunk messages
         (rejections, bad speeds, "cannot decide") at most once per ``log_period`` s each.
+    bearing : Bearing, optional
+        The monitored bearing, parsed already (offline runs); default: the ``bearing`` parameter's.
+    config : DiagnoserConfig, optional
+        The decision's configuration as it is, instead of the one the parameters derive from
+        the model set (offline runs: the textbook baseline, the ablations).
+    keep_history : bool
+        Keep every window's decision in :attr:`history` (offline runs).
     """
 
-    def __init__(self, values: dict, log, log_period: float = 5.0):
+    def __init__(self, values: dict, log, log_period: float = 5.0, bearing: Bearing | None = None,
+                 config: DiagnoserConfig | None = None, keep_history: bool = False):
         self.values = values
         self._log = log
         self._log_repeatable = LogThrottle(log, log_period)
+        self._config = config
+        self.bearing = bearing or load_bearing(values["bearing"])
+        self.history: list[Decision] | None = [] if keep_history else None
         self.streams = {h: ChunkStream(topics.residual_topic(h).name) for h in STREAMS}
         self.core: Diagnoser | None = None
         self._fed: set = set()  # streams that fed the current core
@@ -111,44 +124,54 @@ class DiagnoserSession:
         self.shaft_rpm: float | None = None
         self.last_report: StateReport | None = None
         self.sensor_problem = ""
+        self.speed_problem = ""
         self.decision_problem = ""  # why the last chunk could not be decided on (cleared by a good one)
+        self.last_refusal = ""  # why the last refused chunk was refused
         self.rejected_speeds = 0
 
     def warm_up(self) -> None:
         """Compute now what the first windows would otherwise stall on: the p-value tables, the
-        compiled kernels (numba: from its cache, or 15 s to compile after an install) and the
-        folding thresholds of the simulator model sets (about 1 s each)."""
-        significance.warm_up()
-        kernels.warm_up()
+        compiled kernels (numba: from its cache, or 15 s to compile after an install) and what
+        the front ends of the model sets with defaults of their own prepare (the folding
+        thresholds of the simulator sets, about 1 s each)."""
+        warm_up()
         for name, cfg in MODEL_SET_DEFAULTS.items():
-            if cfg.method == "fold" and (self.values["model_set"] in ("", name)):
-                Diagnoser(cfg, name, load_bearing(self.values["bearing"]), SHIPPED[name].sample_rate).thresholds()
+            if self.values["model_set"] in ("", name):
+                Diagnoser(cfg, name, self.bearing, SHIPPED_SETS[name].sample_rate).warm_up()
 
     # -- configuration -----------------------------------------------------------------
     def configure(self, changed: dict) -> None:
         """Parameters changed (already applied to ``values``): restart the decision if they shape it."""
+        if "bearing" in changed:
+            self.bearing = load_bearing(self.values["bearing"])
         if self.core is not None and any(k in RESTART_ON for k in changed):
             self._log("info", f"{', '.join(sorted(changed))} changed; the decision restarts with the next chunk")
             self.core = None
 
-    def _make_core(self, model_set: str, sample_rate: float) -> Diagnoser:
+    def decision_config(self, model_set: str) -> DiagnoserConfig:
+        """The decision's configuration for residuals of ``model_set``: the one given at construction,
+        else the defaults of the ``model_set`` parameter (or of the residuals' set) with the
+        ``false_alarm_probability``, ``window`` and ``sensor_bandwidth`` parameters applied."""
+        if self._config is not None:
+            return self._config
         v = self.values
-        name = v["model_set"] or model_set
-        cfg = config_for(name)
+        cfg = config_for(v["model_set"] or model_set)
         if v["false_alarm_probability"] > 0:
             cfg = replace(cfg, pfa=float(v["false_alarm_probability"]))
-        cfg = replace(cfg, spectral=replace(cfg.spectral, usable_bandwidth=float(v["sensor_bandwidth"]),
-                                            window_s=float(v["window"])),
-                      fold=replace(cfg.fold, window_s=float(v["window"]) or cfg.fold.window_s))
-        core = Diagnoser(cfg, name, load_bearing(v["bearing"]), sample_rate)
+        return replace(cfg, usable_bandwidth=float(v["sensor_bandwidth"]),
+                       front_end=cfg.front_end.with_window(float(v["window"])))
+
+    def _make_core(self, model_set: str, sample_rate: float) -> Diagnoser:
+        name = self.values["model_set"] or model_set
+        cfg = self.decision_config(model_set)
+        core = Diagnoser(cfg, name, self.bearing, sample_rate)
         core.keep_history = False
         core.expected = set(self.deployed)
         self._tell_speed(core)
-        what = ("window 4 cage periods of the bearing" if cfg.method == "spectral" and not v["window"]
-                else f"window {v['window'] or cfg.fold.window_s:g} s")
         self._log("info", f"deciding with the {cfg.method} front end ({name or 'no'} model set), bearing "
-                          f"{core.bearing.name}, {what}, false-alarm probability {cfg.pfa:g} per window")
-        if cfg.method == "spectral" and self.shaft_rpm is None and not v["rpm"] > 0:
+                          f"{core.bearing.name}, {cfg.front_end.describe_window()}, false-alarm probability "
+                          f"{cfg.pfa:g} per window")
+        if self.speed_unknown_for(cfg):
             self._log("warning", SPEED_UNKNOWN)
         return core
 
@@ -178,6 +201,10 @@ class DiagnoserSession:
             self.rejected_speeds += 1
             self._log_repeatable("bad speed", "warning", f"ignoring shaft speed {rad_s!r} rad/s")
             return
+        self.measured_speed(rpm)
+
+    def measured_speed(self, rpm: float) -> None:
+        """A measured shaft speed (rev/min: a tachometer, a recording's own): it overrides ``rpm``."""
         if self.shaft_rpm is None or abs(rpm / self.shaft_rpm - 1.0) > 1e-3:
             if self.shaft_rpm is None:
                 self._log("info", f"shaft speed {rpm:.1f} rpm from {topics.SHAFT_SPEED.name}")
@@ -187,18 +214,20 @@ class DiagnoserSession:
 
     def on_residual(self, hypothesis: FaultState, stamp: float, first_index: int, sample_rate: float,
                     residual, estimate, train, fault_hz: float, model_set: str, now: float) -> list[StateReport]:
-        """One residual chunk (arrays of equal length); returns the fault states to publish."""
+        """One residual chunk; returns the fault states to publish.
+
+        ``estimate`` and ``train`` are as long as ``residual``, or None when the stream carries
+        none (a model-free stream: y = r; no impulse train).
+        """
         self.last_heard[hypothesis] = now
         r = np.asarray(residual, dtype=float)
         stream = self.streams[hypothesis]
         verdict = stream.check(stamp, first_index, sample_rate, r)
-        if verdict.accepted and not (len(estimate) == len(train) == r.size):
+        if verdict.accepted and not all(a is None or len(a) == r.size for a in (estimate, train)):
             stream.counts["rejected"] += 1
-            self._log_repeatable("rejected", "warning", f"rejected residual chunk: {stream.name}: array lengths differ")
-            return []
+            return self._refused(f"{stream.name}: array lengths differ")
         if not verdict.accepted:
-            self._log_repeatable("rejected", "warning", f"rejected residual chunk: {verdict.reason}")
-            return []
+            return self._refused(verdict.reason)
         switched = self.core is not None and not self.values["model_set"] and model_set != self.core.model_set
         if self.core is None or (verdict.restart and hypothesis in self._fed) or switched:
             if self.core is not None:
@@ -210,20 +239,34 @@ class DiagnoserSession:
         self._fed.add(hypothesis)
         self.deployed.add(hypothesis)
         try:
-            decisions = self.core.update(hypothesis, first_index, sample_rate, r, np.asarray(estimate, float),
-                                         np.asarray(train, float), fault_hz)
+            decisions = self.core.update(hypothesis, first_index, sample_rate, r, _array(estimate), _array(train),
+                                         fault_hz)
         except ValueError as exc:
             stream.counts["rejected by decision"] += 1
             self.decision_problem = str(exc)
             self._log_repeatable("cannot decide", "warning", f"cannot decide: {exc}")
             return []
         self.decision_problem = ""
+        return self._published(decisions)
+
+    def flush(self) -> list[StateReport]:
+        """End of data (a recording's): decide every window that can still be decided."""
+        return self._published(self.core.flush()) if self.core is not None else []
+
+    def _refused(self, reason: str) -> list[StateReport]:
+        self.last_refusal = reason
+        self._log_repeatable("rejected", "warning", f"rejected residual chunk: {reason}")
+        return []
+
+    def _published(self, decisions: list[Decision]) -> list[StateReport]:
+        if self.history is not None:
+            self.history.extend(decisions)
         return [self._report(d) for d in decisions if self._account(d)]
 
     def _account(self, d: Decision) -> bool:
         """Remember a window's sensor verdict; True when its state is to be published."""
-        self.sensor_problem = d.detail[len("sensor: "):] if d.detail.startswith("sensor:") else ""
-        return not self.sensor_problem
+        self.sensor_problem, self.speed_problem = d.sensor_problem, d.speed_problem
+        return d.diagnosed
 
     def _report(self, d: Decision) -> StateReport:
         report = StateReport(d.state, d.confidence, self.time_offset + d.time, self.time_offset + d.onset,
@@ -242,7 +285,7 @@ class DiagnoserSession:
         if report is not None:
             values.update({"confidence": f"{report.confidence:.3f}", "onset (s)": f"{report.onset:.4f}",
                            "decided at (s)": f"{report.stamp:.4f}", "model set": report.model_set})
-            values.update({k: f"{v:.4g}" for k, v in report.scores.items()})
+            values.update({k: f"{v:.4g}" for k, v in report.scores.as_dict().items()})
         if self.core is not None:
             values["bearing"] = self.core.bearing.name
         if self.shaft_rpm is not None:
@@ -259,6 +302,8 @@ class DiagnoserSession:
         elif self.sensor_problem:
             level, message = max(level, LEVEL_WARN), f"sensor problem: {self.sensor_problem}"
             values["sensor"] = self.sensor_problem
+        elif self.speed_problem:
+            level, message = max(level, LEVEL_WARN), f"not diagnosed: {self.speed_problem}"
         elif self.speed_unknown:
             level, message = max(level, LEVEL_WARN), f"{message} ({SPEED_UNKNOWN})"
         if silent:
@@ -268,11 +313,19 @@ class DiagnoserSession:
 
     @property
     def speed_unknown(self) -> bool:
-        """True when the spectral decision estimates the shaft speed blind (no shaft_speed, rpm 0)."""
-        return (self.core is not None and self.core.config.method == "spectral" and self.shaft_rpm is None
-                and not self.values["rpm"] > 0)
+        """True when the decision needs a shaft speed it is not told (no shaft_speed, rpm 0): it is
+        then estimated blind from the vibration."""
+        return self.core is not None and self.speed_unknown_for(self.core.config)
+
+    def speed_unknown_for(self, config: DiagnoserConfig) -> bool:
+        return config.front_end.NEEDS_SPEED and self.shaft_rpm is None and not self.values["rpm"] > 0
 
     def final_health(self, now: float) -> Health:
         """The last status, sent when the node stops."""
         last = self.health(now)
         return Health(LEVEL_STALE, "diagnoser stopped", last.values)
+
+
+def _array(values) -> np.ndarray | None:
+    """``values`` as a float array; None stays None (the stream carries none)."""
+    return None if values is None else np.asarray(values, dtype=float)

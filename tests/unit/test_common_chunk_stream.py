@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from bearing_observer.chunk_stream import ChunkStream
+from bearing_common.chunk_stream import ChunkStream
 
 FS = 48000.0
 

@@ -10,15 +10,6 @@ from bearing_common.states import FaultState
 
 from .state_tracker import Decision
 
-#: Scores summarised per segment (median over the segment's windows), where the front end has them.
-SEGMENT_SCORE_KEYS = (
-    "outer_race", "inner_race", "ball",  # significance (>= 1: significant)
-    "outer_race_posterior", "inner_race_posterior", "ball_posterior", "normal_posterior",
-    "band_low_hz", "band_high_hz", "speed_hz", "speed_sigma_hz",  # spectral: chosen band, speed
-    "outer_race_explained", "inner_race_explained", "outer_race_xcorr", "inner_race_xcorr",  # thesis blocks
-    "kurtosis",  # fold
-)
-
 
 @dataclass
 class Segment:
@@ -41,19 +32,16 @@ class Segment:
                 "model_set": self.model_set}
 
 
-def is_sensor_problem(decision: Decision) -> bool:
-    """Whether a window was not diagnosed because the sensor signal is unusable."""
-    return decision.detail.startswith("sensor:")
-
-
 def segments_from_decisions(decisions: list[Decision], duration: float, model_set: str) -> list[Segment]:
     """Maximal runs of the published state; start = estimated onset, end = next onset.
 
-    Windows with a sensor problem are not diagnosed and take no part.
+    Windows not diagnosed (a sensor or speed problem) take no part. A segment's scores are
+    the medians over its windows of the names its front end summarises
+    (:attr:`.scores.WindowScores.SUMMARY_KEYS`).
     """
     segs: list[Segment] = []
     members: list[list[Decision]] = []
-    for d in (d for d in decisions if not is_sensor_problem(d)):
+    for d in (d for d in decisions if d.diagnosed):
         if not segs:
             segs.append(Segment(0.0, duration, d.state, 0.0, d.time, {}, model_set))
             members.append([])
@@ -75,8 +63,9 @@ def segments_from_decisions(decisions: list[Decision], duration: float, model_se
     for s, ms in zip(segs, members):
         conf = [d.confidence for d in ms]
         s.confidence = float(np.mean(conf)) if conf else 0.0
-        for k in SEGMENT_SCORE_KEYS:
-            v = [d.scores[k] for d in ms if k in d.scores and np.isfinite(d.scores[k])]
+        named = [d.scores.as_dict() for d in ms]
+        for k in type(ms[0].scores).SUMMARY_KEYS if ms else ():
+            v = [n[k] for n in named if k in n and np.isfinite(n[k])]
             if v:
                 s.scores[k] = float(np.median(v))
     return segs

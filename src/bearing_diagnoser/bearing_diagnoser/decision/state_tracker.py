@@ -6,7 +6,8 @@ window labels agree: ``k_of_n`` for a fault, ``normal_k_of_n`` for a return to N
 ``unknown_k_of_n`` for UNKNOWN (slower on purpose: windows that straddle a change often look
 "abnormal but neither fault" for a moment). The onset is back-dated to the middle between
 the last window start with the old state and the first window start with the new one, plus
-half a window (a window takes the label of the state filling most of it).
+half a window (a window takes the label of the state filling most of it), or to when the
+front end says the evidence began, if earlier (accumulated evidence).
 
 The published confidence: when the front end gives each window a posterior over the states
 (the envelope-spectrum decision), the mean posterior of the published state over the last
@@ -24,6 +25,8 @@ import numpy as np
 
 from bearing_common.states import FaultState
 
+from .scores import WindowScores
+
 
 @dataclass
 class Decision:
@@ -31,8 +34,9 @@ class Decision:
 
     Times in seconds of signal time (sample index / sample rate from stream start).
     ``state`` is the published (hysteresis-filtered) state, ``label`` the window's own
-    label; ``scores`` maps names to numbers (see the front ends); ``detail`` says what was
-    special about the window (a missing stream, a sensor problem).
+    label; ``scores`` what the window showed (:mod:`.scores`); ``detail`` says what was
+    special about the window (a missing stream); ``sensor_problem`` and ``speed_problem`` why
+    the window was not diagnosed at all ("" when it was: then it took part in the hysteresis).
     """
 
     time: float
@@ -43,8 +47,15 @@ class Decision:
     confidence: float
     onset: float
     changed: bool
-    scores: dict[str, float] = field(default_factory=dict)
+    scores: WindowScores = field(default_factory=WindowScores)
     detail: str = ""
+    sensor_problem: str = ""
+    speed_problem: str = ""
+
+    @property
+    def diagnosed(self) -> bool:
+        """Whether the window was diagnosed (it was fit to: the sensor signal usable, the speed known)."""
+        return not (self.sensor_problem or self.speed_problem)
 
 
 class StateTracker:
@@ -62,15 +73,17 @@ class StateTracker:
         self.confidence = 0.0
         self._last_window_of: dict[FaultState, float] = {}
 
-    def update(self, label: FaultState, confidence: float, t0: float, t1: float, posterior: dict | None = None) -> bool:
-        """Account one window [t0, t1) s (with its posterior over the states, if any); return
-        whether the published state changed."""
+    def update(self, label: FaultState, confidence: float, t0: float, t1: float, posterior: dict | None = None,
+               evidence_since: float | None = None) -> bool:
+        """Account one window [t0, t1) s (with its posterior over the states, if any, and the time its
+        label's evidence began, if the front end knows it); return whether the published state
+        changed."""
         self._labels.append((label, confidence, t0, t1))
         if posterior is not None:
             self._posteriors.append(posterior)
         changed = False
         if not self._decided and label != FaultState.UNKNOWN:
-            self.state, self.onset, changed = label, t0, True
+            self.state, self.onset, changed = label, min(t0, evidence_since if evidence_since is not None else t0), True
         elif label != self.state:
             k, n = self._rules.get(label, self._default)
             votes = [x for x in list(self._labels)[-n:] if x[0] == label]
@@ -78,6 +91,8 @@ class StateTracker:
                 first_new = votes[0][2]
                 last_old = self._last_window_of.get(self.state, self.onset)
                 onset = 0.5 * (first_new + min(last_old, first_new)) + 0.5 * (t1 - t0)
+                if evidence_since is not None:
+                    onset = min(onset, evidence_since)
                 self.state, self.onset, changed = label, float(np.clip(onset, self.onset, t1)), True
                 self._labels.clear()
                 self._labels.extend(votes)

@@ -1,12 +1,18 @@
-"""Checking a stream of signal chunks before it reaches a filter (no rclpy).
+"""Chunked signal streams: how a chunk continues a stream, and the check every chunk passes (no rclpy).
 
-Nodes that consume chunked signals (observers: vibration; diagnoser: residuals)
-pass every chunk through a ``ChunkStream``. Bad chunks are rejected with a
-reason and counted, never processed: empty or huge chunks, non-positive or
-non-finite sample rates, a rate other than the consumer's, NaN/inf samples,
-stamps that go backwards or repeat. A chunk that does not continue the previous
-one (a gap, a restarted producer) is accepted with ``resync`` set, so the
-consumer restarts its filter state instead of bridging the hole.
+A stream (vibration, a residual topic, a recording cut into chunks) arrives in chunks that
+carry the index of their first sample. :class:`StreamCursor` is the one place that says how
+a chunk continues a stream — a start, contiguous, an overlap (samples already seen), a gap
+(samples missing); each consumer decides what that means for it:
+
+* :class:`ChunkStream` — what nodes run on every received chunk (observers: vibration;
+  diagnoser: residuals). Bad chunks are rejected with a reason and counted, never
+  processed: empty or huge chunks, non-positive or non-finite sample rates, a rate other
+  than the consumer's, NaN/inf samples, stamps that go backwards or repeat. A chunk that
+  does not continue the previous one (a gap, a restarted producer) is accepted with
+  ``resync`` set, so the consumer restarts its filter state instead of bridging the hole;
+* the decision's sample and block buffers (:class:`bearing_common.indexed_buffer.IndexedBuffer`
+  holds them) drop an overlap and pad or restart at a gap.
 """
 
 from __future__ import annotations
@@ -19,6 +25,27 @@ import numpy as np
 from bearing_common.units import sample_rate_problem
 
 MAX_CHUNK_SAMPLES = 2_000_000  # > 1 s at 1 MHz; larger chunks are refused as malformed
+
+
+class StreamCursor:
+    """The index of the next sample a chunked stream expects (None: nothing yet, or forgotten)."""
+
+    def __init__(self):
+        self.next_index: int | None = None
+
+    def offset(self, first_index: int) -> int | None:
+        """How a chunk whose first sample has index ``first_index`` continues the stream:
+        > 0 samples missing before it (a gap), < 0 samples of it already seen (an overlap or a
+        repeat), 0 contiguous; None at a start (nothing expected)."""
+        return None if self.next_index is None else first_index - self.next_index
+
+    def advance(self, first_index: int, n: int) -> None:
+        """``n`` samples from index ``first_index`` were taken: the next expected is after them."""
+        self.next_index = first_index + n
+
+    def forget(self) -> None:
+        """Expect nothing: the next chunk is a start."""
+        self.next_index = None
 
 
 @dataclass(frozen=True)
@@ -54,7 +81,7 @@ class ChunkStream:
         self.sample_rate = sample_rate
         self.max_samples = max_samples
         self.counts = collections.Counter()
-        self._next_index: int | None = None
+        self._cursor = StreamCursor()
         self._next_time: float | None = None
         self._last_stamp: float | None = None
         self._last_index: int | None = None
@@ -68,34 +95,35 @@ class ChunkStream:
         # simulator's 0, or on, with a sensor's clock); the last chunk again (but the first of a run)
         # is a repeat, refused below by its stamp
         repeat = stamp == self._last_stamp and first_index == self._last_index
+        offset = self._cursor.offset(first_index)
         restarted = self._last_stamp is not None and (first_index == 0 or (
-            self._next_index is not None and first_index < self._next_index and not repeat))
+            offset is not None and offset < 0 and not repeat))
         problem = self._problem(stamp, sample_rate, samples, n, check_order=not restarted)
         if problem:  # a refused chunk changes nothing but the counts (a hole: the next one resyncs)
             self.counts["rejected"] += 1
             self.counts[problem.split(":")[0]] += 1
             if problem.startswith("non-finite"):
-                self._next_index = None  # the hole must not be bridged: resync on the next chunk
+                self._cursor.forget()  # the hole must not be bridged: resync on the next chunk
             return Verdict(False, reason=f"{self.name}: {problem}")
         if restarted:
-            self._next_index = None
+            self._cursor.forget()
+            offset = None
         rate_changed = self._rate is not None and self._rate != sample_rate
-        resync = self._next_index is None or rate_changed
+        resync = offset is None or rate_changed
         reason = ""
-        if self._next_index is None:
+        if offset is None:
             reason = "stream restarted" if restarted else (
                 "resynchronised after a rejected chunk" if self.counts["rejected"] else "start of stream")
-        if not resync and (first_index != self._next_index or abs(stamp - self._next_time) > 0.5 / sample_rate):
+        if not resync and (offset != 0 or abs(stamp - self._next_time) > 0.5 / sample_rate):
             resync = True
-            missing = first_index - self._next_index
-            reason = (f"{self.name}: gap of {missing} samples ({stamp - self._next_time:+.6f} s) before "
+            reason = (f"{self.name}: gap of {offset} samples ({stamp - self._next_time:+.6f} s) before "
                       f"index {first_index}; restarting")
             self.counts["gaps"] += 1
         elif rate_changed:
             reason = f"{self.name}: sample rate changed {self._rate:g} -> {sample_rate:g} Hz; restarting"
         self._rate = sample_rate
         self._last_stamp, self._last_index = stamp, first_index
-        self._next_index = first_index + n
+        self._cursor.advance(first_index, n)
         self._next_time = stamp + n / sample_rate
         self.counts["accepted"] += 1
         return Verdict(True, resync=resync, reason=reason, restart=restarted or rate_changed)
@@ -119,5 +147,5 @@ class ChunkStream:
 
     def restart(self) -> None:
         """Forget continuity (e.g. after the consumer reset itself)."""
-        self._next_index = None
+        self._cursor.forget()
         self._last_stamp = None

@@ -41,7 +41,7 @@ import numpy as np
 from bearing_common.bearings import Bearing
 from bearing_common.states import FaultState
 
-from .significance import comb_log10p
+from .significance import averaged_comb_log10p, averaged_median, comb_log10p, log10_gamma_sf
 
 #: The fault hypotheses the envelope spectrum tests.
 HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL)
@@ -102,11 +102,14 @@ def rho_range(u: float, slip_search: bool = True) -> tuple[float, float]:
 
 
 def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[float, float],
-                  mask_shaft: bool = True, n_bands: int = 1) -> dict:
+                  mask_shaft: bool = True, n_bands: int = 1, k: int = 1, exclude=()) -> dict:
     """Per hypothesis, per row of ``z`` (m, n_bins) of normalised SES: the best comb match.
 
     Returns {hypothesis: (log10 p (m,), ρ (m,), S (m,), J (m,))} arrays; ``df`` = bin width
-    (Hz), ``fr`` = shaft rate (Hz).
+    (Hz), ``fr`` = shaft rate (Hz). ``k``: the spectra are averages of k windows
+    (:func:`.significance.averaged_comb_log10p`; each row's best ρ is found with the p-value at
+    the normalising median's median, then its p-value computed exactly). ``exclude``:
+    frequencies (Hz) another explanation holds; a term within 1.5 bins of one is not used.
     """
     z = np.atleast_2d(z)
     m, nb = z.shape
@@ -117,7 +120,7 @@ def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[f
             continue
         top = t[:, 0].max()
         step = 0.5 * df / (top * fr)
-        rhos = np.arange(rho[0], rho[1] + step / 2, step) if rho[1] > rho[0] else np.array([1.0])
+        rhos = np.arange(rho[0], rho[1] + step / 2, step) if rho[1] > rho[0] else np.array([rho[0]])
         n_cells = int(np.ceil((rho[1] - rho[0]) * top * fr / df)) + 1
         f = (t[None, :, 0] * rhos[:, None] + t[None, :, 1]) * fr  # (n_rho, J)
         idx = np.rint(f / df).astype(int)
@@ -125,14 +128,91 @@ def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[f
         if mask_shaft:
             order = np.rint(f / fr)
             active &= ~((order >= 1) & (np.abs(f - order * fr) < 1.5 * df))
+        for g in np.atleast_1d(np.asarray(exclude, float)):
+            active &= np.abs(f - g) >= 1.5 * df
         values = np.where(active[None], z[:, np.clip(idx, 0, nb - 1)], 0.0)  # (m, n_rho, J)
         s = values.sum(axis=2)
         j = active.sum(axis=1)
-        lp = comb_log10p(s, j[None, :])
-        best = np.argmin(lp, axis=1)
         rows = np.arange(m)
-        out[h] = (np.minimum(0.0, lp[rows, best] + np.log10(n_cells * n_bands)), rhos[best], s[rows, best], j[best])
+        if k == 1:
+            lp = comb_log10p(s, j[None, :])
+            best = np.argmin(lp, axis=1)
+            lp_best = lp[rows, best]
+        else:
+            nodes, med = averaged_median(k)
+            proxy = log10_gamma_sf(j[None, :] * k, k * s * nodes[nodes.size // 2] / med)
+            best = np.argmin(np.where(j[None, :] > 0, proxy, 0.0), axis=1)
+            lp_best = averaged_comb_log10p(s[rows, best], j[best], k)
+        out[h] = (np.minimum(0.0, lp_best + np.log10(n_cells * n_bands)), rhos[best], s[rows, best], j[best])
     return out
+
+
+#: log10 of the level at which a ball comb's cage sidebands, tested alone at the comb's best scale,
+#: must show evidence of their own: a ball defect travels with the cage through the load zone
+#: (its lines come with FTF sidebands); a family of lines without them is another machine's.
+SIDEBAND_LEVEL = -2.0
+
+
+def sidebands_carry(z: np.ndarray, df: float, fr: float, terms: np.ndarray, rho: float, mask_shaft: bool = True,
+                    k: int = 1) -> bool:
+    """Whether the sideband terms (``is_carrier`` 0) of one comb, at scale ``rho`` on the normalised SES row
+    ``z`` (k windows averaged), are significant on their own at :data:`SIDEBAND_LEVEL` (one test, no search)."""
+    side = terms[terms[:, 2] == 0]
+    if not len(side):
+        return True
+    lp, _, _, _ = comb_evidence(z, df, fr, {FaultState.BALL: side}, (rho, rho), mask_shaft, 1, k)[FaultState.BALL]
+    return bool(lp[0] < SIDEBAND_LEVEL)
+
+
+#: Decoy searches a comb must beat: this many scale ranges as wide as its slip search, the nearest
+#: ones either side of it whose terms keep clear of the comb's own (in widths: 2, 3, ... up to 12).
+N_DECOYS = 8
+
+
+def decoy_ranges(terms: np.ndarray, rho: tuple[float, float], df: float, fr: float) -> list[tuple[float, float]]:
+    """Up to :data:`N_DECOYS` scale ranges for :func:`stands_out`: as wide as ``rho``, nearest first,
+    alternating sides, each one's terms clear (by 1.5 bins) of every term of the comb itself over
+    ``rho`` (an IR comb's carrier shifted by a fifth lands on its own shaft sideband)."""
+    width = max(rho[1] - rho[0], 0.01)
+    centre = 0.5 * (rho[0] + rho[1])
+    own = [(min((c * r + d) * fr for r in rho), max((c * r + d) * fr for r in rho)) for c, d, _ in terms]
+    out = []
+    for m in range(2, 13):
+        for side in (-1.0, 1.0):
+            lo = centre + side * m * width - 0.5 * width
+            if lo <= 0.2:
+                continue
+            span = [((c * lo + d) * fr, (c * (lo + width) + d) * fr) for c, d, _ in terms]
+            if all(b1 + 1.5 * df < a2 or b2 + 1.5 * df < a1 for a1, b1 in span for a2, b2 in own):
+                out.append((lo, lo + width))
+            if len(out) == N_DECOYS:
+                return out
+    return out
+
+
+def stands_out(z: np.ndarray, df: float, fr: float, terms: np.ndarray, rho: tuple[float, float], log10p: float,
+               mask_shaft: bool = True, k: int = 1) -> bool:
+    """Whether a comb's best match (``log10p``, over the slip range ``rho``, without the band choice's
+    factor) beats the same comb searched over the decoy ranges (:func:`decoy_ranges`) on the same
+    spectrum row ``z``.
+
+    A family of lines that is not this fault's — harmonics of another periodicity, a dense comb
+    of a machine's own — lifts the comb at scales where no line of this fault lies as much as
+    at the fault's: the fault's comb must stand out from all of them (eight decoys: one chance
+    in nine under any exchangeable null). Decoys that land on another hypothesis' lines only
+    make the test stricter: evidence another hypothesis explains does not decide.
+    """
+    for lo, hi in decoy_ranges(terms, rho, df, fr):
+        lp = comb_evidence(z, df, fr, {FaultState.NORMAL: terms}, (lo, hi), mask_shaft, 1, k)[FaultState.NORMAL][0]
+        if lp[0] <= log10p:
+            return False
+    return True
+
+
+def term_frequencies(terms: dict, hypothesis: FaultState, rho: float, fr: float) -> np.ndarray:
+    """Frequencies (Hz) of ``hypothesis``' comb at scale ``rho`` and shaft rate ``fr``."""
+    t = terms[hypothesis]
+    return (t[:, 0] * rho + t[:, 1]) * fr
 
 
 def highest_term(terms: dict, rho_hi: float) -> float:

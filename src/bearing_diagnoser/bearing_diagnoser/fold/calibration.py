@@ -1,6 +1,6 @@
 """Thresholds derived from a stated false-alarm probability on white noise.
 
-Under noise only, the CFAR periodicity (:mod:`.periodicity`) is a ratio of two
+Under noise only, the CFAR periodicity (:mod:`.folding`) is a ratio of two
 statistics of the same stream, so its distribution does not depend on the noise level;
 it depends on the window length, sample rate, band and bins.  :func:`calibrate` runs the
 exact decision front end on white Gaussian noise (non-overlapping windows), fits a
@@ -21,9 +21,9 @@ from scipy import stats
 
 from bearing_common.bearings import Bearing, fault_frequency
 
-from .fold_scores import HYPOTHESES, FoldScorer, FoldSettings
-from .periodicity import EnergyEnvelope
-from .window_buffer import StreamBlocks
+from ..decision.stream_blocks import EnergyEnvelope, StreamBlocks
+from .scoring import HYPOTHESES, FoldScorer
+from .settings import FoldSettings
 
 N_WINDOWS = 600  #: noise windows per calibration (per hypothesis)
 SEED = 20150101
@@ -66,8 +66,8 @@ def _calibrate(settings: FoldSettings, pfa: float, sample_rate: float, bearing: 
     for b0 in range(0, min(st.n_blocks for st in streams.values()) - w + 1, w):
         wins = {h: st.window(b0, b0 + w) for h, st in streams.items()}
         scores = scorer.scores(wins, fault_hz, dict.fromkeys(HYPOTHESES, False), env.decimation, b0, fe)
-        cf += [scores[f"{h.label}_cfar"] for h in HYPOTHESES]
-        ku.append(scores["kurtosis"])
+        cf += [scores.cfar[h] for h in HYPOTHESES]
+        ku.append(scores.kurtosis)
     cf, ku = np.asarray(cf), np.asarray(ku)
     return Calibration(_tail_quantile(cf, pfa), _tail_quantile(ku, pfa), int(ku.size), float(np.median(cf)),
                        float(np.quantile(cf, 0.99)), float(np.median(ku)))

@@ -14,7 +14,7 @@ Nw = 2^k and 1.5·2^k, bands [f_k − fs/Nw, f_k + fs/Nw] centred on f_k = k·fs
 The chosen band is the one whose prewhitened envelope spectrum gives the smallest fault
 p-value over all hypotheses, on a buffer of recent data (a fault-specific "gram", in the
 spirit of the IESFOgram of Mauricio et al. 2020); every window test then pays a Bonferroni
-factor of the number of candidates for that choice (:mod:`.fault_lines`). The kurtogram's
+factor of the number of candidates for that choice (:mod:`.fault_combs`). The kurtogram's
 own criterion — the most impulsive band — was measured and rejected: on the development
 records it locks onto impulsive content that is not periodic at any fault rate (MFPT IR:
 12-14 kHz, where the BPFI line stands 21× above its neighbours, against 486× in 2-6 kHz)
@@ -29,7 +29,7 @@ from itertools import groupby
 import numpy as np
 
 from .envelope_spectrum import band_kurtosis, band_ses, normalise, unit_magnitude
-from .fault_lines import comb_evidence
+from .fault_combs import comb_evidence
 
 
 @dataclass(frozen=True)
@@ -73,24 +73,29 @@ def _band_power(cumulative: np.ndarray, df: float, bands: np.ndarray) -> np.ndar
     return (cumulative[i1] - cumulative[i0]) / np.maximum(i1 - i0, 1)
 
 
+def live_bands(raw: np.ndarray, n: int, fs: float, f_top: float, f_usable: float) -> list[np.ndarray]:
+    """The admissible candidates (:func:`candidate_bands`) that hold band power, from ``raw``, the rfft of
+    ``n`` samples: at least 1e-6 × the median candidate's (module docstring)."""
+    groups = candidate_bands(fs, f_top, f_usable)
+    if not groups:
+        return []
+    cumulative = np.concatenate([[0.0], np.cumsum(np.abs(raw) ** 2)])
+    power = [_band_power(cumulative, fs / n, g) for g in groups]
+    floor = 1e-6 * float(np.median(np.concatenate(power)))
+    return [g[p > floor] for g, p in zip(groups, power) if np.any(p > floor)]
+
+
 def choose_band(x: np.ndarray, fs: float, f_top: float, f_usable: float, fr: float, terms: dict,
                 rho: tuple[float, float], prewhiten: bool = True, mask_shaft: bool = True,
                 criterion: str = "evidence") -> BandChoice | None:
     """The candidate band of buffer ``x`` (fs Hz) with the strongest fault evidence; None if none fits.
 
-    ``f_top`` and ``fr`` in Hz, ``terms`` and ``rho`` as in :func:`.fault_lines.comb_evidence`.
+    ``f_top`` and ``fr`` in Hz, ``terms`` and ``rho`` as in :func:`.fault_combs.comb_evidence`.
     ``criterion="kurtogram"``: the most impulsive band instead (Antoni's kurtogram, the
     textbook choice; the window tests then pay no factor for it).
     """
-    groups = candidate_bands(fs, f_top, f_usable)
-    if not groups:
-        return None
     raw = np.fft.rfft(x - x.mean())
-    cumulative = np.concatenate([[0.0], np.cumsum(np.abs(raw) ** 2)])
-    power = [_band_power(cumulative, fs / x.size, g) for g in groups]
-    floor = 1e-6 * float(np.median(np.concatenate(power)))
-    groups = [g[p > floor] for g, p in zip(groups, power)]
-    groups = [g for g in groups if len(g)]
+    groups = live_bands(raw, x.size, fs, f_top, f_usable)
     n_candidates = sum(len(g) for g in groups)
     if not n_candidates:
         return None

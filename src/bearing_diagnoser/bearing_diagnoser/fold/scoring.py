@@ -1,13 +1,13 @@
-"""The folding front end of the simulator model sets: window statistics and the window label.
+"""The fold front end's window statistics and the window label (simulator model sets).
 
 Per window and hypothesis h (OUTER_RACE, INNER_RACE) on the energy-envelope blocks of
-:class:`.periodicity.EnergyEnvelope`:
+:class:`bearing_diagnoser.decision.stream_blocks.EnergyEnvelope`:
 
 * ``c_h`` — CFAR periodicity: the band-passed energy envelope folded at the fault period
   (phase and ±3 % of period searched), divided by the same statistic at decoy periods clear
-  of every bearing line (:mod:`.periodicity`, :mod:`.bearing_lines`); its threshold comes
+  of every bearing line (:mod:`.folding`, :mod:`.decoys`); its threshold comes
   from a stated per-window false-alarm probability on white noise (:mod:`.calibration`);
-  scores are published as c_h / threshold (≥ 1 = significant);
+  its significance is c_h / threshold (≥ 1 = significant);
 * ``E_h`` — "the model explains the data": 1 − ‖r‖²/‖y − ȳ‖², the fraction of measurement
   energy the train-driven observer removes (thesis 3.2.3: an observer injecting its own
   impulses in NORMAL operation gives E < 0); breaks ties between hypotheses;
@@ -30,89 +30,51 @@ better by ``explained_margin``, else UNKNOWN. Confidence (0..1): for a fault,
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from bearing_common.bearings import Bearing, fault_frequency
 from bearing_common.states import FaultState
 
-from . import kernels
-from .bearing_lines import decoy_frequencies
-from .periodicity import (
-    XCORR_LAG_S,
-    FoldBank,
-    cfar_ses,
-    explain_away,
-    impact_phase_mask,
-    period_grid,
-    train_correlation,
-)
+from ..decision.pairwise_sum import row_sum
+from ..decision.scores import THESIS_SUMMARY_KEYS, WindowScores
+from ..decision.thesis_blocks import explained_fraction, train_correlation
+from .decoys import decoy_frequencies
+from .envelope_reference import cfar_ses
+from .folding import FoldBank, explain_away, impact_phase_mask, period_grid
+from .settings import FoldSettings
 
-#: The hypotheses the folding front end tests.
+#: The hypotheses the fold front end tests.
 HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE)
 
-#: Per hypothesis, the names of its scores (``<h>_cfar``, ...), spelt once instead of per window.
-_NAMES = {h: {k: f"{h.label}_{k}" for k in ("cfar", "cfar_raw", "hz", "explained", "xcorr")} for h in HYPOTHESES}
 
+@dataclass
+class FoldScores(WindowScores):
+    """:class:`~bearing_diagnoser.decision.scores.WindowScores` of the fold: per hypothesis the CFAR
+    statistic after explaining the strongest hypothesis away (``cfar``) and before (``cfar_raw``)
+    and the frequency (Hz) that folded best; for the window, the newest quarter's share of the
+    band energy (``tail_ratio``) and the band-passed kurtosis."""
 
-@dataclass(frozen=True)
-class FoldSettings:
-    """Settings of the folding front end.
+    cfar: dict = field(default_factory=dict)
+    cfar_raw: dict = field(default_factory=dict)
+    hz: dict = field(default_factory=dict)
+    tail_ratio: float = 1.0
+    kurtosis: float = 0.0
 
-    Attributes
-    ----------
-    window_s, hop_s : float
-        Sliding window length and hop (s).
-    band : (lo, hi)
-        Band-pass (Hz) before the energy envelope: the resonances the impacts excite.
-    bins, search, n_decoys : int, float, int
-        Phase bins of the folded profile; relative period search (±); decoy periods.
-    threshold, kurtosis_threshold : float or None
-        Explicit thresholds (None = derive from the configuration's pfa).
-    dominance, explained_margin : float
-        Ratio of CFAR statistics that picks one of two significant hypotheses; difference
-        of model-explains fractions that breaks a remaining tie.
-    rms_floor : float
-        Window RMS (m/s²) below which the window is NORMAL without further test.
-    quiet_tail, quiet_ratio : float
-        A window whose newest ``quiet_tail`` holds less than ``quiet_ratio`` × the older
-        part's mean band energy is NORMAL (the activity stopped).
-    use_kurtosis : bool
-        Label impulsive-but-aperiodic windows UNKNOWN (else NORMAL).
-    statistic : ``"fold"`` or ``"ses"``
-        Folded envelope (default) or the squared envelope spectrum at the fault harmonics
-        (the textbook reference, ``--method envelope``).
-    ses_harmonics, envelope_window_s : int, float
-        Highest harmonic and shortest window of the envelope-spectrum reference.
-    xcorr_lag_s : float
-        Lags 0..this (s) of the thesis-literal correlation of |r| with u.
-    explain_away : bool
-        Re-test the weaker hypothesis with the stronger one's impact phases masked.
-    nominal_rpm : float
-        Speed (rev/min) at which the decoy ratios and the calibration are computed.
-    """
+    SUMMARY_KEYS = (*(h.label for h in HYPOTHESES), *THESIS_SUMMARY_KEYS, "kurtosis")
 
-    window_s: float = 0.05
-    hop_s: float = 0.01
-    band: tuple[float, float] = (1500.0, 8000.0)
-    bins: int = 16
-    search: float = 0.03
-    n_decoys: int = 6
-    threshold: float | None = None
-    kurtosis_threshold: float | None = None
-    dominance: float = 1.5
-    explained_margin: float = 0.1
-    rms_floor: float = 1e-2
-    quiet_tail: float = 0.25
-    quiet_ratio: float = 0.15
-    use_kurtosis: bool = True
-    statistic: str = "fold"
-    ses_harmonics: int = 3
-    envelope_window_s: float = 0.1
-    xcorr_lag_s: float = XCORR_LAG_S
-    explain_away: bool = True
-    nominal_rpm: float = 1800.0
+    def as_dict(self) -> dict[str, float]:
+        out: dict[str, float] = {}
+        for h in self.cfar:
+            out.update({f"{h.label}_cfar": self.cfar[h], f"{h.label}_cfar_raw": self.cfar_raw[h],
+                        f"{h.label}_hz": self.hz[h]})
+            if h in self.explained:
+                out.update({f"{h.label}_explained": self.explained[h], f"{h.label}_xcorr": self.xcorr[h]})
+        out.update(rms=self.rms, tail_ratio=self.tail_ratio, kurtosis=self.kurtosis)
+        out.update({h.label: v for h, v in self.significance.items()})
+        return out
 
 
 class FoldScorer:
@@ -160,64 +122,61 @@ class FoldScorer:
         return bank[1].cfar(env)
 
     def scores(self, windows: dict, fault_hz: dict, has_model: dict, decimation: int, b0: int,
-               fe: float) -> dict[str, float]:
+               fe: float) -> FoldScores:
         """Statistics of one window from the block arrays of each hypothesis stream.
 
-        ``windows``: {hypothesis: {key: block array}} (:attr:`.periodicity.EnergyEnvelope.keys`);
+        ``windows``: {hypothesis: {key: block array}} (:class:`.StreamBlocks.window`);
         ``fault_hz``: the streams' fault frequencies (Hz); ``has_model``: whether a stream
-        carries an observer estimate. ``<h>_cfar`` is the CFAR statistic after explaining the
-        strongest hypothesis away, ``<h>_cfar_raw`` the one before.
+        carries an observer estimate.
         """
         s = self.settings
-        scores: dict[str, float] = {}
+        scores = FoldScores()
         for h, win in windows.items():
-            name = _NAMES[h]
             env = win["env"]
             w = env.size
             n = w * decimation
             q = max(1, int(round(s.quiet_tail * w)))
-            sy, sy2, sr2, se, s_older, s_tail, sb4 = kernels.window_sums(env, win["b4"], win["y"], win["y2"],
-                                                                         win["r2"], q)
+            sy, sy2, sr2, se, s_older, s_tail, sb4 = window_sums(env, win["b4"], win["y"], win["y2"], win["r2"], q)
             ratio, _, best_hz = self._cfar(h, env, fe, fault_hz[h])
-            scores[name["cfar"]] = scores[name["cfar_raw"]] = ratio
-            scores[name["hz"]] = best_hz
-            var_y = sy2 - sy * sy / n
+            scores.cfar[h] = scores.cfar_raw[h] = ratio
+            scores.hz[h] = best_hz
             if has_model[h]:
-                scores[name["explained"]] = float(1.0 - sr2 / var_y) if var_y > 0 else 0.0
-                scores[name["xcorr"]] = train_correlation(win["ar"], win["u"], s.xcorr_lag_s * fe)
-            if "rms" not in scores:
-                scores["rms"] = float(math.sqrt(max(var_y, 0.0) / n))
+                scores.explained[h] = explained_fraction(sy, sy2, sr2, n)
+                scores.xcorr[h] = train_correlation(win["ar"], win["u"], s.xcorr_lag_s * fe)
+            if len(scores.cfar) == 1:  # the window's own statistics, from the first stream's samples
+                var_y = sy2 - sy * sy / n
+                scores.rms = float(math.sqrt(max(var_y, 0.0) / n))
                 m2 = se / w
                 older = s_older / (w - q) if w > q else m2
-                scores["tail_ratio"] = float(s_tail / min(q, w) / older) if older > 0 else 1.0
-                scores["kurtosis"] = float(sb4 / w / (m2 * m2)) if m2 > 0 else 0.0
+                scores.tail_ratio = float(s_tail / min(q, w) / older) if older > 0 else 1.0
+                scores.kurtosis = float(sb4 / w / (m2 * m2)) if m2 > 0 else 0.0
         if len(windows) > 1 and s.explain_away:
-            best = max(windows, key=lambda h: scores[_NAMES[h]["cfar"]])
-            mask = impact_phase_mask(windows[best]["env"], fe, scores[_NAMES[best]["hz"]], b0, s.bins)
+            best = max(windows, key=lambda h: scores.cfar[h])
+            mask = impact_phase_mask(windows[best]["env"], fe, scores.hz[best], b0, s.bins)
             for h in windows:
                 if h != best:
                     env = explain_away(windows[h]["env"], mask)
-                    scores[_NAMES[h]["cfar"]] = self._cfar(h, env, fe, fault_hz[h])[0]
+                    scores.cfar[h] = self._cfar(h, env, fe, fault_hz[h])[0]
         return scores
 
-    def label(self, scores: dict[str, float], hypotheses) -> tuple[FaultState, float]:
-        """Window label and its confidence in [0, 1]; adds ``<h>`` = c_h / threshold to ``scores``."""
+    def label(self, scores: FoldScores, hypotheses) -> tuple[FaultState, float]:
+        """Window label and its confidence in [0, 1]; sets the significance c_h / threshold in ``scores``."""
         s = self.settings
         thr, kthr = self.thresholds
-        c = {h: scores.get(_NAMES[h]["cfar"], float("nan")) for h in hypotheses}
+        c = {h: scores.cfar.get(h, float("nan")) for h in hypotheses}
         for h in hypotheses:
-            scores[h.label] = c[h] / thr
+            scores.significance[h] = c[h] / thr
         valid = {h: v for h, v in c.items() if math.isfinite(v)}
         cmax = max(valid.values()) if valid else 0.0
         normal_conf = _unit((thr - cmax) / max(thr - 1.0, 1e-9))
-        if scores["rms"] < s.rms_floor:
+        if scores.rms < s.rms_floor:
             return FaultState.NORMAL, 1.0
-        if scores.get("tail_ratio", 1.0) < s.quiet_ratio:
-            return FaultState.NORMAL, float(1.0 - scores["tail_ratio"] / s.quiet_ratio)
+        if scores.tail_ratio < s.quiet_ratio:
+            return FaultState.NORMAL, float(1.0 - scores.tail_ratio / s.quiet_ratio)
         significant = sorted((h for h, v in valid.items() if v >= thr), key=lambda h: valid[h], reverse=True)
         if not significant:
-            if s.use_kurtosis and scores["kurtosis"] > kthr:
-                return FaultState.UNKNOWN, _unit(1.0 - kthr / scores["kurtosis"])
+            if s.use_kurtosis and scores.kurtosis > kthr:
+                return FaultState.UNKNOWN, _unit(1.0 - kthr / scores.kurtosis)
             return FaultState.NORMAL, normal_conf
         best = significant[0]
         others = [v for h, v in valid.items() if h != best]
@@ -227,8 +186,8 @@ class FoldScorer:
         if len(significant) == 1 or dom >= s.dominance:
             return best, strength * clarity
         second = significant[1]
-        eb = scores.get(_NAMES[best]["explained"])
-        es = scores.get(_NAMES[second]["explained"])
+        eb = scores.explained.get(best)
+        es = scores.explained.get(second)
         if eb is not None and es is not None:
             if eb - es >= s.explained_margin:
                 return best, 0.5 * strength
@@ -240,3 +199,29 @@ class FoldScorer:
 def _unit(x: float) -> float:
     """``x`` clipped to [0, 1] (``np.clip`` of one number, without its per-call cost)."""
     return min(max(x, 0.0), 1.0)
+
+
+@njit(cache=True)
+def window_sums(env: np.ndarray, b4: np.ndarray, y: np.ndarray, y2: np.ndarray, r2: np.ndarray, q: int):
+    """The sums a fold window's scores need, each ``x.sum()`` bit for bit
+    (:func:`~bearing_diagnoser.decision.pairwise_sum.row_sum`).
+
+    Returns ``(Σy, Σy², Σr², Σenv, Σenv[:-q], Σenv[-q:], Σb4)`` over the window's blocks,
+    ``q`` >= 1 the newest blocks (all of them when q >= the window; the older part is then
+    empty, sum 0).
+    """
+    w = env.size
+    e = env.reshape(1, w)
+    tail = min(q, w)
+    return (row_sum(y.reshape(1, w), 0, 0, w), row_sum(y2.reshape(1, w), 0, 0, w),
+            row_sum(r2.reshape(1, w), 0, 0, w), row_sum(e, 0, 0, w), row_sum(e, 0, 0, w - tail),
+            row_sum(e, 0, w - tail, tail), row_sum(b4.reshape(1, w), 0, 0, w))
+
+
+@njit(cache=True)
+def all_finite(x: np.ndarray) -> bool:
+    """``np.all(np.isfinite(x))``."""
+    for v in x:
+        if not np.isfinite(v):
+            return False
+    return True

@@ -89,8 +89,12 @@ def band_kurtosis(X: np.ndarray, n: int, fs: float, bands: np.ndarray) -> np.nda
     return (env ** 2).mean(axis=1) / np.maximum(mean, 1e-300) ** 2 - 2.0
 
 
-def normalise(ses: np.ndarray, stride: int = 8) -> np.ndarray:
-    """ln 2 · SES / running median over 2·N_MED + 1 bins (last axis), shape kept.
+def normalise(ses: np.ndarray, stride: int = 8, level: float = np.log(2.0)) -> np.ndarray:
+    """``level`` · SES / running median over 2·N_MED + 1 bins (last axis), shape kept.
+
+    ``level`` is the median of one bin's null law, so that a normalised bin has median ≈ 1:
+    ln 2 for a window's SES (Exp(1)), med_K for the average of K windows' (Gamma(K, 1/K),
+    :func:`.significance.averaged_median`).
 
     The median is evaluated every ``stride`` bins (each a median of 101 neighbouring
     bins, the same law as the exact running median) and interpolated linearly. A median
@@ -109,4 +113,4 @@ def normalise(ses: np.ndarray, stride: int = 8) -> np.ndarray:
         medians = np.concatenate([medians, last[:, None]], axis=1)
     grid = np.arange(n)
     med = np.stack([np.interp(grid, centres, row) for row in medians])
-    return np.log(2.0) * ses / np.maximum(med, 1e-300)
+    return level * ses / np.maximum(med, 1e-300)

@@ -1,0 +1,76 @@
+"""The one interface between the decision core and a front end: observer chunks in, window verdicts out.
+
+A front end (:mod:`bearing_diagnoser.spectral`, :mod:`bearing_diagnoser.fold`) is built by
+:class:`bearing_diagnoser.diagnoser.Diagnoser` from its settings (the one place that picks
+it). The core keeps, per observer stream, the stream's blocks (:mod:`.stream_blocks`: the
+raw sums every window's RMS and thesis blocks need, and the energy envelope of
+``envelope_band`` when the front end reads one), hands each chunk's measurement
+y = r + ŷ to the front end, and turns the verdicts it returns into published states
+(:mod:`.state_tracker`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from bearing_common.states import FaultState
+
+from .scores import WindowScores
+from .stream_blocks import StreamBlocks
+
+
+@dataclass(frozen=True)
+class WindowVerdict:
+    """What a front end concludes from one window [start, end) (s of signal time).
+
+    ``posterior``: {state: probability} when the front end has one (the tracker then reports
+    the mean posterior of the published state as its confidence); ``detail``: what was special
+    about the window (a missing stream); ``sensor_problem``, ``speed_problem``: why the window
+    was not diagnosed at all (the sensor signal unusable; the shaft speed not known well enough
+    to tell the parts apart; "" when it was); ``evidence_since``: when the evidence for the label began (s), when
+    the front end knows it better than the window (accumulated evidence).
+    """
+
+    start: float
+    end: float
+    label: FaultState
+    confidence: float
+    scores: WindowScores
+    posterior: dict | None = None
+    detail: str = ""
+    sensor_problem: str = ""
+    speed_problem: str = ""
+    evidence_since: float | None = None
+
+
+class FrontEnd(Protocol):
+    """What the core asks of a front end.
+
+    Attributes
+    ----------
+    envelope_band : (lo, hi) or None
+        Band (Hz) of the energy envelope the front end reads from every stream's blocks;
+        None: the blocks hold the raw sums only.
+    reads_blocks : bool
+        Whether the front end decides from the streams' blocks (their sums are then kept for
+        every stream, not only for streams with a model or a train).
+    """
+
+    envelope_band: tuple[float, float] | None
+    reads_blocks: bool
+
+    def tell_speed(self, hz: float | None, tolerance: float | None = None) -> None:
+        """The shaft rate (Hz) and its relative tolerance (None: the front end's default); None = unknown."""
+
+    def warm_up(self) -> None:
+        """Compute now what the first windows would otherwise wait for (thresholds)."""
+
+    def push(self, hypothesis: FaultState, first_index: int, y, streams: dict[FaultState, StreamBlocks],
+             expected: set) -> list[WindowVerdict]:
+        """One stream's chunk: its measurement ``y`` from sample ``first_index`` (its blocks are already in
+        ``streams``); ``expected``: hypotheses whose streams are deployed but not seen yet. Returns the
+        windows that became due."""
+
+    def flush(self, streams: dict[FaultState, StreamBlocks], expected: set) -> list[WindowVerdict]:
+        """End of data: decide what can still be decided."""

@@ -1,0 +1,1 @@
+"""The folding front end, for the simulator model sets (the package map: :mod:`bearing_diagnoser`)."""

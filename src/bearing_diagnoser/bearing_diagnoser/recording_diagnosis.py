@@ -1,0 +1,171 @@
+"""Offline diagnosis of a recording, exactly as the live graph would: chunks through the nodes' sessions, then segments.
+
+:func:`diagnose_recording` is what ``bearing-diagnose`` runs: it picks the model set and
+the decision's configuration, resamples the recording to the set's rate, and feeds it in
+chunks through :class:`.pipeline.MonitorPipeline` (the OR and IR observer sessions and the
+diagnoser session). ``method="envelope"`` runs the textbook squared-envelope-spectrum
+reference on the measurement instead (:func:`.front_ends.envelope_baseline`).
+:func:`diagnose_measurement` runs the decision of a model set on a measurement alone.
+
+What the run assumed (model set, resampling, speed) is logged (``logging``, logger
+``bearing_diagnoser.recording_diagnosis``); ``bearing-diagnose`` prints it on stderr.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from bearing_common.bearings import CATALOG, DEFAULT_BEARING, Bearing
+from bearing_recordings.recording import MEASURED_RPM_TOLERANCE, InputError, Recording
+from bearing_recordings.resampling import resample
+
+from .decision.config import DiagnoserConfig
+from .decision.segments import Segment, segments_from_decisions
+from .decision.state_tracker import Decision
+from .diagnoser import STREAMS
+from .front_ends import config_for, envelope_baseline
+from .pipeline import MonitorPipeline, choose_model_set
+
+LOG = logging.getLogger(__name__)
+
+#: Chunk length (s) fed to the graph, as the simulator node publishes (0.01 s).
+CHUNK_S = 0.01
+
+METHODS = ("model", "envelope")
+
+
+@dataclass
+class OfflineResult:
+    """Output of :func:`diagnose_recording`."""
+
+    segments: list[Segment]
+    decisions: list[Decision]
+    model_set: str
+    sample_rate: float
+    rpm: float | None
+    accel: np.ndarray
+    truth: np.ndarray | None
+    streams: dict = field(default_factory=dict)  # hypothesis label -> dict of arrays (for plots)
+    cpu_s: float = 0.0
+    method: str = "model"
+    not_diagnosed: list = field(default_factory=list)  # (start s, end s, why: a sensor or speed problem)
+
+
+def _speed(rec: Recording, rpm: float | None) -> float | None:
+    speed = rpm or rec.rpm
+    if speed is None:
+        LOG.warning("no shaft speed given; estimating it from the vibration (the 1x line) — unreliable "
+                    "without a prior, give --rpm")
+    return speed
+
+
+def _decision_config(config: DiagnoserConfig, method: str, set_rate: float, recorded_rate: float) -> DiagnoserConfig:
+    """The configuration a run uses: ``method``'s, and nothing above the recording's own band when it
+    is upsampled to the model set's rate."""
+    if method == "envelope":
+        config = envelope_baseline(config)
+    if set_rate > recorded_rate:
+        usable = min(config.usable_bandwidth or np.inf, 0.45 * recorded_rate)
+        config = replace(config, usable_bandwidth=usable)
+    return config
+
+
+def _at_rate(rec: Recording, fs: float, model_set: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """The recording's acceleration and truth at ``fs`` Hz."""
+    x = rec.accel
+    if abs(rec.sample_rate - fs) > 1e-9 * fs:
+        LOG.info("resampling %g Hz -> %g Hz (anti-aliased, resample_poly) for model set %s", rec.sample_rate, fs,
+                 model_set)
+        x = resample(x, rec.sample_rate, fs)
+    truth = rec.truth
+    if truth is not None and truth.size != x.size:
+        truth = truth[np.minimum((np.arange(x.size) * rec.sample_rate / fs).astype(int), truth.size - 1)]
+    return x, truth
+
+
+def run_pipeline(pipeline: MonitorPipeline, x: np.ndarray, fs: float, source: str,
+                 chunk_s: float = CHUNK_S) -> list[Decision]:
+    """Feed ``x`` (m/s² at ``fs`` Hz) to ``pipeline`` in chunks of ``chunk_s`` seconds; every window's decision."""
+    chunk = max(1, int(round(chunk_s * fs)))
+    for i in range(0, x.size, chunk):
+        pipeline.feed(i, fs, x[i:i + chunk], source)
+    return pipeline.finish()
+
+
+def diagnose_recording(rec: Recording, model_set: str | None = None, method: str = "model",
+                       rpm: float | None = None, bearing: Bearing | None = None,
+                       config: DiagnoserConfig | None = None, keep_streams: bool = False,
+                       chunk_s: float = CHUNK_S, rpm_tolerance: float | None = None) -> OfflineResult:
+    """Diagnose a whole recording offline, exactly as the live graph would.
+
+    Parameters
+    ----------
+    rec : Recording
+        From :func:`bearing_recordings.load.load_recording`.
+    model_set : str, optional
+        Override the automatic choice (:func:`.pipeline.choose_model_set`).
+    method : ``"model"`` or ``"envelope"``
+        The decision with the observers (default), or the textbook envelope reference.
+    rpm : float, optional
+        Shaft speed (rev/min); default the recording's, else estimated from the vibration.
+    rpm_tolerance : float, optional
+        Relative accuracy of the speed: default the recording's own statement for its speed
+        (a rig's measurement), else the diagnoser's default for a told speed (a nameplate's).
+    bearing : Bearing, optional
+        The monitored bearing (default: the recording's, else the 6205).
+    config : DiagnoserConfig, optional
+        Decision parameters (default: the model set's).
+    keep_streams : bool
+        Keep full residual / estimate / train arrays for figures.
+
+    Raises InputError (one line) when the recording cannot be diagnosed: a sample rate too
+    low for the bearing's fault lines, a record shorter than one analysis window, a signal
+    that is a sensor problem throughout.
+    """
+    if method not in METHODS:
+        raise InputError(f"unknown method {method!r}; expected {' or '.join(METHODS)}")
+    bearing = bearing or rec.bearing or CATALOG[DEFAULT_BEARING]
+    chosen = choose_model_set(rec.source, rec.sample_rate, bearing, model_set)
+    ms = chosen.name
+    LOG.info("model set %s%s; bearing %s", ms, "" if model_set else " (chosen from the input)", bearing.name)
+    fs = chosen.sample_rate or rec.sample_rate
+    cfg = _decision_config(config or config_for(ms), method, fs, rec.sample_rate)
+    speed = _speed(rec, rpm)
+    try:
+        cfg.front_end.check_recording(min(fs, rec.sample_rate), bearing, speed, rec.duration, cfg.usable_bandwidth)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    x, truth = _at_rate(rec, fs, ms)
+    observed = method == "model"
+    if rpm_tolerance is None and (rpm is None or rpm == rec.rpm):
+        rpm_tolerance = rec.rpm_tolerance
+    pipeline = MonitorPipeline(bearing, ms, cfg, speed, observed,
+                               STREAMS if observed or cfg.front_end.EVERY_STREAM else STREAMS[:1], keep_streams,
+                               rpm_tolerance)
+    t_cpu = time.process_time()
+    decisions = run_pipeline(pipeline, x, fs, rec.source, chunk_s)
+    cpu = time.process_time() - t_cpu
+    problems = [(d.window_start, d.window_end, d.sensor_problem or d.speed_problem) for d in decisions
+                if not d.diagnosed]
+    segs = segments_from_decisions(decisions, x.size / fs, ms)
+    if decisions and not segs:
+        raise InputError(f"no window could be diagnosed: {problems[0][2]}")
+    return OfflineResult(segs, decisions, ms, fs, speed, x, truth, pipeline.kept_streams(), cpu, method, problems)
+
+
+def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",
+                         config: DiagnoserConfig | None = None, bearing: Bearing | None = None,
+                         chunk_s: float = CHUNK_S,
+                         rpm_tolerance: float = MEASURED_RPM_TOLERANCE) -> tuple[list[Segment], list[Decision]]:
+    """The decision with the defaults of ``model_set`` on a measurement alone (no observer: y fed
+    as both streams' residual, ŷ = 0): the "observer without train, L = 0" front end of
+    diagnosis-notes.md, for testing the decision core and for data without a model set. ``rpm``
+    is known to ``rpm_tolerance`` (default: a measured speed's)."""
+    pipeline = MonitorPipeline(bearing or CATALOG[DEFAULT_BEARING], model_set, config or config_for(model_set), rpm,
+                               observed=False, rpm_tolerance=rpm_tolerance)
+    decisions = run_pipeline(pipeline, np.asarray(y, dtype=float), fs, "measurement", chunk_s)
+    return segments_from_decisions(decisions, y.size / fs, model_set), decisions

@@ -1,0 +1,331 @@
+"""The envelope-spectrum evidence of a stream of samples, window by window (the spectral front end's engine).
+
+Schedule, derived from the bearing and the speed (nothing fitted to a recording):
+
+* window T = 4/FTF = 8/(fr·(1 − r)) (r = d/D·cos φ), rounded up to a fast FFT length: the
+  narrowest spacing any hypothesis must resolve is the ball hypothesis' cage sideband
+  (FTF ≈ 0.4·fr), and a Hann main lobe spans ±2/T. That is 4·n outer-race impacts per
+  window (36 for a 6205: 0.33 s at 1800 rpm, 1.0 s at 600 rpm). Hop T/2 (Hann, 50 %
+  overlap);
+* every :attr:`.settings.SpectralSettings.reselect_s` = 1 s of new data (every window while
+  the buffer is not full yet) the speed (refined from the
+  vibration inside the told tolerance, or estimated blind) and the demodulation band
+  (:mod:`.band_choice`) are re-estimated on the most recent max(2 s, 2·T) of data: 2 s
+  hold ≥ 20 revolutions at ≥ 10 Hz and give 0.5 Hz speed bins;
+* each window: prewhiten, band-pass and demodulate in one FFT (:mod:`.envelope_spectrum`),
+  normalise, test every hypothesis' comb (:mod:`.fault_combs`), check the sensor
+  (:mod:`bearing_diagnoser.decision.sensor_health`) — the short horizon;
+* every non-overlapping window also goes to the long horizon (:mod:`.accumulation`), whose
+  evidence comes with the window's; it restarts when the geometry changes (the measured
+  shaft rate moved by more than half a bin at the highest comb term), at a gap, and when
+  the front end sees a change (:meth:`EvidenceStream.restart_long`).
+
+The speed: a told one (a tachometer; a nameplate or a recording's label, ``told_tolerance``)
+is a prior. The shaft rate is measured from the 1x line and its harmonics
+(:mod:`.shaft_speed`, at least three lines) within the told tolerance; when none is found
+there but a shaft comb is plain within twice the tolerance, that measurement is used and
+said to disagree with the told speed (``speed_source`` "measured"); otherwise the told speed
+stands, with its whole tolerance as uncertainty (a wide slip search); a buffer without
+lines keeps the last measurement. Terms two hypotheses could both match at one speed
+(within the slip search alone: 3·BPFO and 2·BPFI of a 6205) do not count
+(:func:`.fault_combs.drop_ambiguous`); a line one hypothesis explains is taken from the
+others before they are tested (explain-away), in the window as in the long horizon.
+
+Only past data enter a decision (causal). A gap in the samples restarts the schedule.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.fft import next_fast_len
+
+from bearing_common.bearings import Bearing
+from bearing_common.chunk_stream import StreamCursor
+from bearing_common.indexed_buffer import IndexedBuffer
+from bearing_common.states import FaultState
+
+from ..decision.sensor_health import SensorCheck, check_window
+from .accumulation import CombGeometry, LongHorizon
+from .band_choice import BandChoice, choose_band, live_bands
+from .envelope_spectrum import band_ses, normalise, window_spectrum
+from .fault_combs import (
+    CombEvidence,
+    comb_evidence,
+    comb_terms,
+    drop_ambiguous,
+    highest_term,
+    rho_range,
+    sidebands_carry,
+    stands_out,
+    term_frequencies,
+)
+from .settings import SpectralSettings, check_resolvable
+from .shaft_speed import estimate_speed
+
+
+@dataclass(frozen=True)
+class WindowEvidence:
+    """What one analysis window shows.
+
+    ``start``/``end``: sample indices (end exclusive); ``evidence``: per hypothesis
+    (:data:`.fault_combs.HYPOTHESES`), empty when the sensor signal is unusable (then ``band``
+    may be None); ``speed_hz``/``speed_sigma``: shaft rate used and its
+    standard uncertainty (Hz), ``speed_source`` "told", "refined", "measured" (outside the
+    told tolerance) or "estimated" (blind), ``told_hz`` the told rate (None: none);
+    ``long``: per hypothesis the long horizon's :class:`.accumulation.HorizonEvidence`,
+    resting on ``horizon_windows`` windows from sample ``horizon_start`` (empty when the long
+    horizon is off or holds nothing yet).
+    """
+
+    start: int
+    end: int
+    evidence: dict
+    band: BandChoice | None
+    speed_hz: float
+    speed_sigma: float
+    speed_source: str
+    sensor: SensorCheck
+    told_hz: float | None = None
+    long: dict = field(default_factory=dict)
+    horizon_start: int = 0
+    horizon_windows: int = 0
+
+
+class EvidenceStream:
+    """Streaming envelope-spectrum evidence for one accelerometer channel.
+
+    Parameters
+    ----------
+    sample_rate : float
+        Hz.
+    bearing : Bearing
+    settings : SpectralSettings
+    usable_bandwidth : float
+        Hz up to which the sensor chain measures (0: up to 0.45·fs).
+    """
+
+    def __init__(self, sample_rate: float, bearing: Bearing, settings: SpectralSettings = SpectralSettings(),
+                 usable_bandwidth: float = 0.0):
+        self.fs = float(sample_rate)
+        self.bearing = bearing
+        self.settings = settings
+        self.usable_bandwidth = float(usable_bandwidth)
+        self._told: tuple[float, float] | None = None  # (Hz, relative tolerance)
+        self._samples = IndexedBuffer()  # the recent samples, by stream index
+        self._cursor = StreamCursor()
+        self._origin = 0  # absolute index where the current schedule began
+        self._next_end: int | None = None
+        self._last_update: int | None = None
+        self.speed: tuple[float, float, str] | None = None  # (Hz, sigma Hz, source)
+        self.band: BandChoice | None = None
+        self._geometry_for: float | None = None
+        self.long = LongHorizon(settings.max_windows, settings.mask_shaft, settings.band_criterion) \
+            if settings.accumulate else None
+        self._long_evidence: dict = {}
+
+    @property
+    def retained_from(self) -> int:
+        """Absolute index of the oldest sample still held (nothing before it is needed again)."""
+        return self._samples.end - self._samples.held
+
+    # -- speed ------------------------------------------------------------------------
+    def tell_speed(self, hz: float | None, tolerance: float | None = None) -> None:
+        """A measured or nominal shaft rate (Hz) and its relative tolerance; None = unknown. Without
+        refinement (the textbook baseline) the told speed is taken as it is: its tolerance is the
+        settings' (a tachometer's), whatever the teller says."""
+        if hz is None:
+            self._told = None
+            return
+        tol = self.settings.told_tolerance if tolerance is None or not self.settings.refine_speed else tolerance
+        self._told = (float(hz), float(tol))
+        measured = self.speed is not None and self.speed[2] in ("refined", "measured")
+        if not measured or abs(self.speed[0] / hz - 1.0) > 2 * tol:
+            self.speed = (float(hz), tol / 2 * hz, "told")  # used until the next re-estimation
+
+    # -- geometry that follows the speed -----------------------------------------------
+    def _set_geometry(self, fr: float, sigma: float) -> None:
+        """Window, slip range and comb terms at shaft rate ``fr`` (Hz); ValueError when the sample
+        rate cannot resolve the bearing's fault lines at that speed (:func:`check_resolvable`)."""
+        s = self.settings
+        check_resolvable(self.fs, self.bearing, 60.0 * fr, s, self.usable_bandwidth)
+        window_s = s.window_s or 4.0 / self.bearing.orders().ftf / fr
+        self.window = next_fast_len(int(np.ceil(window_s * self.fs)))
+        self.hop = self.window // 2
+        self.rho = rho_range(sigma / fr, s.slip_search)
+        terms = comb_terms(self.bearing, fundamental_only=s.fundamental_only)
+        slip = rho_range(0.0, s.slip_search)  # two hypotheses share one speed: only slip tells them apart
+        self.terms = drop_ambiguous(terms, slip[1] - slip[0]) if s.drop_ambiguous else terms
+        self.f_top = highest_term(terms, self.rho[1]) * fr
+        self._geometry_for = fr
+
+    def _estimate_speed(self, x: np.ndarray) -> None:
+        s = self.settings
+        if self._told is not None:
+            hz, tol = self._told
+            # the tolerance must span 4 bins of the buffer's spectrum before a line in it can be told
+            # from its neighbours (0.67 s at 30 Hz ± 10 %); until then the told speed stands
+            resolved = x.size / self.fs >= min(s.buffer_s, 2.0 / (tol * hz))
+            refine = s.refine_speed and resolved
+            found = estimate_speed(x, self.fs, hz * (1 - tol), hz * (1 + tol), min_lines=s.speed_lines) \
+                if refine else None
+            if found and not self._fault_family(found.hz, hz):
+                self.speed = (found.hz, found.sigma, "refined")
+                return
+            wider = estimate_speed(x, self.fs, hz * (1 - 2 * tol), hz * (1 + 2 * tol), min_lines=s.speed_lines) \
+                if refine else None
+            wider = None if wider is None or self._fault_family(wider.hz, hz) else wider
+            if wider:
+                self.speed = (wider.hz, wider.sigma, "measured")
+            elif self.speed is None or self.speed[2] not in ("refined", "measured"):
+                self.speed = (hz, tol / 2 * hz, "told")  # (a buffer without lines keeps the last measurement)
+        else:
+            found = estimate_speed(x, self.fs, *s.blind_range_hz)
+            if found:
+                self.speed = (found.hz, found.sigma, "estimated")
+
+    def _fault_family(self, hz: float, told_hz: float) -> bool:
+        """Whether a measured rate ``hz`` that departs from the told one by more than the slip search
+        is rather a submultiple (1/1 to 1/5) of a fault frequency at the told speed: an outer-race
+        comb's lines at k·BPFO hold a harmonic series at BPFO/3 too (HIT-SM's outer-race records)."""
+        lo, hi = rho_range(0.0, self.settings.slip_search)
+        if lo <= hz / told_hz <= hi:
+            return False
+        o = self.bearing.orders()
+        return any(lo <= hz * n / (f * told_hz) <= hi for f in (o.bpfo, o.bpfi, 2 * o.bsf) for n in range(1, 6))
+
+    def _update(self, end: int) -> None:
+        """Re-estimate speed and band on the recent buffer ending at sample ``end``."""
+        s = self.settings
+        span = int(max(s.buffer_s, 2.0 * (self.window / self.fs if self._geometry_for else 0.0)) * self.fs)
+        x = self._held(end - span, end)
+        self._estimate_speed(x)
+        self._last_update = end
+        if self.speed is None:
+            return
+        fr, sigma, _ = self.speed
+        self._set_geometry(fr, sigma)
+        usable = self.usable_bandwidth or 0.45 * self.fs
+        self.band = choose_band(x, self.fs, self.f_top, usable, fr, self.terms, self.rho, s.prewhiten, s.mask_shaft,
+                                s.band_criterion)
+        geometry = CombGeometry(self.fs, fr, sigma, self.window, self.rho, self.terms, self.f_top)
+        if self.long is not None and self.long.geometry is not None and self.long.geometry.same_bins(geometry):
+            self.long.retune(geometry)
+        elif self.long is not None:
+            bands = live_bands(np.fft.rfft(x - x.mean()), x.size, self.fs, self.f_top, usable)
+            self.long.restart(end - self.window, geometry, bands)
+            self._long_evidence = {}
+
+    def long_onset(self, hypothesis: FaultState) -> int:
+        """When the long horizon's evidence of ``hypothesis`` began (sample index, :meth:`.LongHorizon.onset`)."""
+        return self.long.onset(hypothesis, self._long_evidence[hypothesis])
+
+    def restart_long(self, start: int) -> None:
+        """The condition changed at sample ``start``: the long horizon begins afresh with the window
+        starting there (same geometry)."""
+        if self.long is not None and self.long.geometry is not None:
+            self.long.restart(start, self.long.geometry, self.long._open[0].bands)
+            self._long_evidence = {}
+
+    # -- samples in, evidence out -------------------------------------------------------
+    def push(self, first_index: int, y) -> list[WindowEvidence]:
+        """Feed samples ``y`` starting at absolute index ``first_index``; return windows that became due."""
+        y = np.asarray(y, dtype=float)
+        offset = self._cursor.offset(first_index)
+        if offset is not None and offset < 0:  # overlap: keep only new samples
+            y = y[-offset:]
+            first_index -= offset
+        if offset is None or offset > 0:  # start or gap: a new schedule
+            self._samples.clear(first=first_index)
+            self._origin = first_index
+            self._next_end, self._last_update = None, None
+            if self.long is not None:
+                self.long.stop()
+        if y.size == 0:
+            return []
+        self._samples.append(y)
+        self._cursor.advance(first_index, y.size)
+        return self._run()
+
+    def _held(self, i0: int, i1: int) -> np.ndarray:
+        """The held samples from index max(i0, oldest held) to i1 (a view)."""
+        return self._samples.view(max(i0, self.retained_from), i1)[0]
+
+    def _run(self) -> list[WindowEvidence]:
+        s = self.settings
+        out = []
+        have = self._samples.end
+        reselect = int(s.reselect_s * self.fs)
+        while True:
+            if self._next_end is None:  # the schedule starts once a speed is known
+                if self.speed is None:  # blind: estimate it on buffer_s of data, retry every reselect_s
+                    due = self._origin + int(s.buffer_s * self.fs)
+                    if have < due or (self._last_update is not None and have - self._last_update < reselect):
+                        break
+                    self._update(have)
+                    if self.speed is None:
+                        break
+                self._set_geometry(*self.speed[:2])
+                self._next_end = self._origin + self.window
+            end = self._next_end
+            if end > have:
+                break
+            filling = end - self._origin < s.buffer_s * self.fs  # re-estimate every window until the buffer is full
+            if self._last_update is None or end - self._last_update >= (self.hop if filling else reselect):
+                self._update(end)
+            if end - self._origin < self.window:  # the window grew with a slower speed
+                self._next_end = self._origin + self.window
+                continue
+            window = self._window(end)
+            if window is not None:
+                out.append(window)
+            self._next_end = end + self.hop
+        self._trim()
+        return out
+
+    def _trim(self) -> None:
+        """Keep what the next re-estimation and window need."""
+        window_s = self.window / self.fs if self._geometry_for else 0.0
+        keep = int((max(self.settings.buffer_s, 2.0 * window_s) + window_s + 1.0) * self.fs)
+        if self._samples.held > 2 * keep:  # now and then, not per chunk
+            self._samples.trim(self._samples.end - keep)
+
+    def _window(self, end: int) -> WindowEvidence | None:
+        """The window ending at ``end``: its evidence; no evidence for a sensor problem; None
+        when no demodulation band could be chosen (no usable band power)."""
+        s = self.settings
+        x = self._held(end - self.window, end)
+        sensor = check_window(x)
+        fr, sigma, source = self.speed
+        if not sensor.ok or self.band is None:
+            return None if sensor.ok else WindowEvidence(end - self.window, end, {}, self.band, fr, sigma, source,
+                                                         sensor)
+        spectrum = window_spectrum(x, s.prewhiten)
+        ses, df = band_ses(spectrum, x.size, self.fs, np.array([[self.band.low, self.band.high]]), self.f_top)
+        z = normalise(ses)
+        found = comb_evidence(z, df, fr, self.terms, self.rho, s.mask_shaft, self.band.candidates)
+        evidence = {h: CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
+                    for h, (lp, rho, stat, j) in found.items()}
+        if len(evidence) > 1:  # the others without the strongest one's lines (:mod:`.accumulation`)
+            strongest = min(evidence, key=lambda h: evidence[h].log10p)
+            held = term_frequencies(self.terms, strongest, evidence[strongest].rho, fr)
+            others = {h: self.terms[h] for h in evidence if h != strongest}
+            for h, (lp, rho, stat, j) in comb_evidence(z, df, fr, others, self.rho, s.mask_shaft, self.band.candidates,
+                                                       exclude=held).items():
+                evidence[h] = CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
+        for h, e in evidence.items():  # distinct evidence only (:mod:`.accumulation`)
+            distinct = stands_out(z, df, fr, self.terms[h], self.rho, e.log10p - np.log10(self.band.candidates),
+                                  s.mask_shaft)
+            if h == FaultState.BALL:
+                distinct = distinct and sidebands_carry(z, df, fr, self.terms[h], e.rho, s.mask_shaft)
+            if not distinct:
+                evidence[h] = CombEvidence(0.0, e.rho, e.statistic, e.terms)
+        told = self._told[0] if self._told else None
+        if self.long is None:
+            return WindowEvidence(end - self.window, end, evidence, self.band, fr, sigma, source, sensor, told)
+        if self.long.add(end - self.window, spectrum):
+            self._long_evidence = self.long.evidence()
+        return WindowEvidence(end - self.window, end, evidence, self.band, fr, sigma, source, sensor, told,
+                              self._long_evidence, self.long.start or 0, self.long.windows)
+

@@ -1,0 +1,188 @@
+"""The envelope-spectrum front end (real machines): one measurement in, window verdicts out.
+
+Either observer stream's measurement y = r + ŷ feeds one :class:`.evidence_stream.EvidenceStream`
+(the first to bring a sample wins: either observer may lag or die). Every window brings two
+horizons of evidence per hypothesis: the window's own (short: a change is seen within a
+window or two) and the long horizon's (:mod:`.accumulation`: a weak stationary fault
+becomes plain over seconds). A hypothesis' p-value is the smaller of the two, and both
+kinds of test are counted in one false-alarm budget: with R = ``false_alarm_rate`` per hour,
+T the window (s), hop T/2, the short tests run 7200/T times an hour and the long-horizon
+evaluations 3600/T (each already paying for its two staggered accumulations), so each test
+runs at α = R·T/10800 — by the union bound at most R false significant tests an hour of
+Gaussian noise, whatever their dependence. The p-values then become a label, a confidence
+and a posterior over NORMAL, OUTER_RACE, INNER_RACE and BALL (:mod:`.window_label`).
+
+A change the short horizon sees — a fault significant in the window other than the one the
+long horizon names — restarts the long horizon at that window, so that the old condition
+does not dilute the new one (a new fault in a healthy machine is diluted by at most the
+long horizon's length, :mod:`.accumulation`). A state that only the long horizon carries dates its evidence from
+the start of the horizon (``evidence_since``): the onset is when the evidence began, not
+when it became significant.
+
+A window is not diagnosed while the shaft speed is known only to within more than ±2 %
+(a nameplate speed the 1x line has not confirmed yet): every part's comb then slides over
+several percent and can fit a healthy machine's lines (``speed_problem``).
+
+The thesis' blocks of every observer stream that carries a model or a train are measured
+over the same samples (:mod:`bearing_diagnoser.decision.thesis_blocks`). A window whose
+sensor signal is unusable is reported as such and not diagnosed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bearing_common.bearings import Bearing
+from bearing_common.states import FaultState
+
+from ..decision.config import DiagnoserConfig
+from ..decision.front_end import WindowVerdict
+from ..decision.scores import THESIS_SUMMARY_KEYS, WindowScores
+from ..decision.stream_blocks import StreamBlocks
+from ..decision.thesis_blocks import XCORR_LAG_S, explained_fraction, train_correlation
+from .band_choice import BandChoice
+from .evidence_stream import EvidenceStream, WindowEvidence
+from .fault_combs import HYPOTHESES
+from .window_label import label_window, significance_level
+
+#: Relative speed uncertainty above which a window is not diagnosed: a nameplate speed the vibration has
+#: not confirmed (no 1x line yet) lets every part's comb slide over several percent, where each can
+#: fit a healthy machine's lines (the shaft speed told by a tachometer or a rig: 2 %, σ = 1 %).
+UNSURE_SPEED = 0.01
+
+
+@dataclass
+class SpectralScores(WindowScores):
+    """:class:`~bearing_diagnoser.decision.scores.WindowScores` of the envelope spectrum: per
+    hypothesis the comb's best scale ρ of the kinematic frequencies, the long horizon's
+    significance alone (``long``: its statistic ÷ threshold) and the posterior (with NORMAL's);
+    the window's demodulation band; the shaft rate used (Hz) with its uncertainty, the told
+    rate (NaN: none told) and whether the measured one disagrees with it beyond the told
+    tolerance (1) or not (0); the seconds of signal the long horizon rests on."""
+
+    rho: dict = field(default_factory=dict)
+    long: dict = field(default_factory=dict)
+    posterior: dict = field(default_factory=dict)
+    band: BandChoice | None = None
+    speed_hz: float = math.nan
+    speed_sigma_hz: float = math.nan
+    told_speed_hz: float = math.nan
+    speed_disagrees: float = 0.0
+    horizon_s: float = 0.0
+
+    SUMMARY_KEYS = (*(h.label for h in HYPOTHESES),
+                    *(f"{h.label}_posterior" for h in (*HYPOTHESES, FaultState.NORMAL)),
+                    "band_low_hz", "band_high_hz", "speed_hz", "speed_sigma_hz", *THESIS_SUMMARY_KEYS)
+
+    def as_dict(self) -> dict[str, float]:
+        out: dict[str, float] = {}
+        for h, v in self.significance.items():
+            out[h.label] = v
+            out[f"{h.label}_rho"] = self.rho[h]
+            if h in self.long:
+                out[f"{h.label}_long"] = self.long[h]
+        if self.band is not None:
+            out.update(band_low_hz=self.band.low, band_high_hz=self.band.high, band_candidates=self.band.candidates)
+        out.update(speed_hz=self.speed_hz, speed_sigma_hz=self.speed_sigma_hz, told_speed_hz=self.told_speed_hz,
+                   speed_disagrees=self.speed_disagrees, horizon_s=self.horizon_s, rms=self.rms)
+        out.update(self.thesis_items())
+        out.update({f"{h.label}_posterior": p for h, p in self.posterior.items()})
+        return out
+
+
+class SpectralFrontEnd:
+    """The front end (:class:`bearing_diagnoser.decision.front_end.FrontEnd`) of :class:`.settings.SpectralSettings`.
+
+    Parameters
+    ----------
+    config : DiagnoserConfig
+        Its ``front_end`` (SpectralSettings), ``pfa`` (false-alarm probability per window, all
+        hypotheses together) and ``usable_bandwidth`` (Hz; 0: up to 0.45·fs).
+    sample_rate : float
+        Hz.
+    bearing : Bearing
+    """
+
+    envelope_band = None
+    reads_blocks = False
+
+    def __init__(self, config: DiagnoserConfig, sample_rate: float, bearing: Bearing):
+        self.false_alarm_rate = config.front_end.false_alarm_rate
+        self.fs = float(sample_rate)
+        self.evidence = EvidenceStream(sample_rate, bearing, config.front_end, config.usable_bandwidth)
+
+    def tell_speed(self, hz: float | None, tolerance: float | None = None) -> None:
+        self.evidence.tell_speed(hz, tolerance)
+
+    def warm_up(self) -> None:
+        """Nothing to prepare: the p-value tables are filled by the node's warm-up."""
+
+    def push(self, hypothesis: FaultState, first_index: int, y, streams: dict[FaultState, StreamBlocks],
+             expected: set) -> list[WindowVerdict]:
+        out = [self._verdict(w, streams) for w in self.evidence.push(first_index, y)]
+        for st in streams.values():  # blocks before the evidence's buffer are never needed again
+            st.trim(self.evidence.retained_from // st.env.decimation)
+        return out
+
+    def flush(self, streams: dict[FaultState, StreamBlocks], expected: set) -> list[WindowVerdict]:
+        """Nothing pending: every window is decided when its last sample arrives."""
+        return []
+
+    def test_level(self, window: int) -> float:
+        """α of each test for windows of ``window`` samples (module docstring)."""
+        return self.false_alarm_rate * (window / self.fs) / 10800.0
+
+    def _verdict(self, w: WindowEvidence, streams: dict[FaultState, StreamBlocks]) -> WindowVerdict:
+        t0, t1 = w.start / self.fs, w.end / self.fs
+        alpha = self.test_level(w.end - w.start)
+        short = {h: e.log10p for h, e in w.evidence.items()}
+        long = {h: e.log10p for h, e in w.long.items() if h in short}
+        both = {h: min(lp, long.get(h, 0.0)) for h, lp in short.items()}
+        level = significance_level(alpha, len(both)) if both else 1.0  # none: a sensor problem
+        scores = SpectralScores(rms=w.sensor.rms, significance={h: lp / level for h, lp in both.items()},
+                                rho={h: e.rho for h, e in w.evidence.items()},
+                                long={h: lp / level for h, lp in long.items()}, band=w.band, speed_hz=w.speed_hz,
+                                speed_sigma_hz=w.speed_sigma,
+                                told_speed_hz=math.nan if w.told_hz is None else w.told_hz,
+                                speed_disagrees=float(w.speed_source == "measured"),
+                                horizon_s=w.horizon_windows * (w.end - w.start) / self.fs)
+        _thesis_blocks(scores, streams, w.start, w.end)
+        if not w.sensor.ok:
+            return WindowVerdict(t0, t1, FaultState.UNKNOWN, 0.0, scores, sensor_problem=w.sensor.problem)
+        if w.speed_source == "told" and w.speed_sigma > UNSURE_SPEED * w.speed_hz:
+            return WindowVerdict(t0, t1, FaultState.UNKNOWN, 0.0, scores, speed_problem=(
+                f"shaft speed not confirmed: told {60 * w.speed_hz:.0f} rpm "
+                f"± {200 * w.speed_sigma / w.speed_hz:.0f} %, "
+                "no 1x line in the vibration (yet); a tachometer on shaft_speed, or a smaller rpm_tolerance, "
+                "lets the decision tell the parts apart"))
+        label, confidence, post = label_window(both, alpha)
+        scores.posterior = post
+        seen, held = _label(short, alpha), _label(long, alpha)
+        since = None
+        if label in w.long and seen != label:  # the long horizon's evidence alone: since when it holds
+            since = self.evidence.long_onset(label) / self.fs
+        if FaultState.NORMAL not in (seen, held) and FaultState.UNKNOWN not in (seen, held) and held != seen:
+            self.evidence.restart_long(w.start)  # the window names another fault than the long horizon
+        return WindowVerdict(t0, t1, label, confidence, scores, posterior=post, evidence_since=since)
+
+
+def _label(log10p: dict, alpha: float) -> FaultState:
+    """The label of one horizon's p-values alone (NORMAL when it has none)."""
+    return label_window(log10p, alpha)[0] if log10p else FaultState.NORMAL
+
+
+def _thesis_blocks(scores: WindowScores, streams: dict[FaultState, StreamBlocks], start: int, end: int) -> None:
+    """The thesis' blocks per observer stream over samples [start, end) into ``scores``."""
+    for h, st in streams.items():
+        d = st.env.decimation
+        win = st.window(-(-start // d), end // d)
+        if win is None or not np.all(np.isfinite(win["y"])):
+            continue
+        n = win["y"].size * d
+        if st.has_model:
+            scores.explained[h] = explained_fraction(win["y"].sum(), win["y2"].sum(), win["r2"].sum(), n)
+        if st.has_train:
+            scores.xcorr[h] = train_correlation(win["ar"], win["u"], XCORR_LAG_S * st.env.envelope_rate)
