@@ -83,3 +83,24 @@ def test_every_import_is_declared_or_a_stated_exception(path):
         else:
             missing.append(f"{module}: no known rosdep key or exception (tools/rosdep_keys.py)")
     assert not missing, f"{path} needs: " + "; ".join(missing)
+
+
+@pytest.mark.parametrize("path", [p for p in MANIFESTS if (p.parent / "setup.py").exists()],
+                         ids=lambda p: p.parent.name)
+def test_setup_installs_every_subpackage(path, monkeypatch):
+    """colcon installs only the packages setup.py lists: a subpackage left out works from the
+    source tree but is missing from a full install's ``install/`` (ImportError at ``ros2 run``)."""
+    import runpy
+
+    import setuptools
+
+    captured = {}
+    monkeypatch.setattr(setuptools, "setup", lambda **kwargs: captured.update(kwargs))
+    monkeypatch.chdir(path.parent)
+    runpy.run_path(str(path.parent / "setup.py"), run_name="__main__")
+    name = read_manifest(path).findtext("name")
+    on_disk = {".".join(init.parent.relative_to(path.parent).parts)
+               for init in (path.parent / name).rglob("__init__.py") if "__pycache__" not in init.parts}
+    listed = set(captured["packages"])
+    assert listed == on_disk, f"{path.parent / 'setup.py'}: not listed {sorted(on_disk - listed)}, " \
+                              f"not on disk {sorted(listed - on_disk)}"
