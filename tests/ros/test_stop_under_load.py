@@ -7,7 +7,7 @@ behind real time, and a stop needing more than about 0.6 s of CPU per node canno
 within the watchdog's 4 s. That was the stall seen under ``ros2 launch`` on a busy
 machine: the interpreter's teardown at exit garbage-collected the whole start-up heap
 (numba, scipy: about 160 000 objects, 0.8-1 s of CPU per node) after the node had
-already stopped cleanly; the nodes now skip that collection (``node_main``). Before the fix
+already stopped cleanly; the nodes now end without that teardown (``node_main``). Before the fix
 every node printed the watchdog's ``Timeout (0:00:04)!`` and exited 1 here.
 """
 
