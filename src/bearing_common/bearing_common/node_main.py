@@ -10,6 +10,9 @@
   valid — the place for a last message (the diagnoser's /diagnostics "stopped"; call
   ``publisher.wait_for_all_acked(...)`` there if it must arrive) — and the node is
   destroyed and rclpy shut down.
+* A signal while the nodes are being built (the diagnoser's JIT warm-up takes seconds of
+  CPU) ends the start-up at once (:class:`~bearing_common.stop_signals.StopRequested`),
+  with one line on stderr and exit code 0.
 * Invalid parameters (ValueError while building the node) give one line on stderr
   and exit code 2.
 * A stop still under way ``STOP_STALL_S`` after the signal prints the stack of every
@@ -37,7 +40,7 @@ import os
 import signal
 import sys
 
-from .stop_signals import StopSignals
+from .stop_signals import StopRequested, StopSignals
 
 POLL_S = 0.1  #: s, longest a stop request waits for the default spin to notice it
 STOP_STALL_S = 4.0  #: s, a stop taking longer prints every thread's stack and exits 1
@@ -104,10 +107,16 @@ def run_nodes(program: str, make_nodes, run=None, args=None) -> int:
         nodes = []
         try:
             try:
+                stop.abort = True
                 nodes = make_nodes()
+                stop.abort = False
             except ValueError as exc:
                 print(f"{program}: {exc}", file=sys.stderr)  # noqa: T201 (the one-line error is the interface)
                 return 2
+            except StopRequested:
+                print(f"{program}: {signal.Signals(stop.signal).name} while starting: stopped",  # noqa: T201
+                      file=sys.stderr)
+                return 0
             (run or spin_until)(nodes, stop)
             if stop:
                 nodes[0].get_logger().info(f"{signal.Signals(stop.signal).name} received: stopping")
