@@ -29,6 +29,7 @@ from ros_harness import REPO_ROOT, session_domain_id
 from test_bag_record_play import write_play_bag
 
 from bearing_bringup.process_group import ProcessGroup
+from bearing_common import topics
 from tools import full_ros_install
 
 pytestmark = pytest.mark.ros
@@ -257,7 +258,7 @@ def test_ros2_run_of_every_executable(install, shell):
         assert time.monotonic() < deadline, f"`ros2 node list` shows {sorted(seen)}, not {sorted(want - seen)}"
         seen = set(shell.ok("ros2 node list").split())
     # running, not starting: the simulator's and the observer's first chunks compiled (numba, lazily)
-    assert shell.echo_once("residual/inner_race")["sample_rate"] > 0.0
+    assert shell.echo_once(topics.RESIDUAL_INNER_RACE.name)["sample_rate"] > 0.0
     for member in runs.values():
         os.killpg(member.process.pid, signal.SIGINT)
     for script, member in runs.items():
@@ -272,7 +273,7 @@ def test_monitor_launch_echo_node_param_and_ctrl_c_under_load(install, shell, tm
     launch = shell.start("launch", f"ros2 launch bearing_bringup monitor.launch.py params_file:={params}")
     shell.wait_for_line(launch, FAULT_SEEN, 180.0)
     time.sleep(2.0)  # the diagnoser's transient-local history (10 decisions) holds outer-race states only
-    echoed = shell.echo_once("fault_state")
+    echoed = shell.echo_once(topics.FAULT_STATE.name)
     assert echoed["state"] == 1 and echoed["confidence"] > 0.5 and "outer_race" in echoed["hypotheses"], echoed
 
     assert {"/simulator", "/or_observer", "/ir_observer", "/diagnoser"} <= set(shell.ok("ros2 node list").split())
@@ -299,7 +300,7 @@ def test_fleet_launch_echo_fleet_state_and_ctrl_c(install, shell, tmp_path):
     shell.wait_for_line(launch, FAULT_SEEN, 180.0)
     deadline = time.monotonic() + 60.0
     while True:
-        summary = shell.echo_once("fleet_state")
+        summary = shell.echo_once(topics.FLEET_STATE.name)
         motors = {m["motor"]: m for m in summary["motors"]}
         if motors.get("motor_1", {}).get("state") == 1 or time.monotonic() > deadline:
             break
@@ -311,9 +312,9 @@ def test_topic_echo_of_a_bag_played_by_bearing_bag(shell, tmp_path):
     write_play_bag(tmp_path / "bag")
     player = shell.start("play", f"ros2 run bearing_recordings bearing-bag play {tmp_path / 'bag'} --loop")
     shell.wait_for_line(player, "bearing-bag: playing", 60.0)  # its publishers exist: echo finds the types
-    state = shell.echo_once("fault_state")
+    state = shell.echo_once(topics.FAULT_STATE.name)
     assert state["state"] == 1 and state["confidence"] == 0.9 and state["model_set"] == "sim_48k", state
-    chunk = shell.echo_once("vibration/drive_end")
+    chunk = shell.echo_once(topics.VIBRATION.name)
     assert chunk["header"]["frame_id"] == "drive_end" and chunk["sample_rate"] == 1000.0, chunk
     assert chunk["source"] == "simulator" and chunk["first_sample_index"] % 50 == 0, chunk
     os.killpg(player.process.pid, signal.SIGINT)
