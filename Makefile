@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup demo test unit lint fuzz bench accuracy false-alarms trend soak clean
+.PHONY: setup full-install demo test unit lint fuzz bench accuracy false-alarms trend soak cli-test stops clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -12,8 +12,18 @@ setup:
 demo: setup
 	@.venv/bin/bearing-graph --out out/demo
 
+# the real ros2 CLI over the wheels (../shared/ros2-cli) and ros_ws/ built in it as a full ROS 2 install
+# builds it (out/ros2-cli, out/full-install; redone only when inputs change); skipped without ../shared/ros2-cli
+full-install: setup
+	@$(VENV_PY) tools/full_ros_install.py || [ $$? -eq 3 ]
+
 test: setup
 	@$(VENV_PY) -m pytest tests
+
+# the real-CLI tests (tests/ros/test_ros2_cli.py) in the full install: ros2 launch/run/topic/param/interface
+# and Ctrl-C; not in `make test` (the first build takes 8 min of CI's budget; see issue 19)
+cli-test: setup full-install
+	@BEARING_REAL_CLI=1 $(VENV_PY) -m pytest tests/ros/test_ros2_cli.py
 
 # the tests without DDS (pure-Python cores, files, CLIs): the fast loop
 unit: setup
@@ -50,6 +60,11 @@ trend: setup
 SOAK_MINUTES ?= 30
 soak: setup
 	@$(VENV_PY) benchmarks/soak.py --minutes $(SOAK_MINUTES) --out out/soak.md
+
+# Ctrl-C to the starved `ros2 launch` of the monitoring graph, STOPS times (default 20): 0 stalls expected
+STOPS ?= 20
+stops: setup full-install
+	@BEARING_REAL_CLI=1 BEARING_STOPS=$(STOPS) $(VENV_PY) -m pytest tests/ros/test_ros2_cli.py -k starved_monitor -q -s
 
 clean:
 	rm -rf ros_ws/build ros_ws/install ros_ws/log out

@@ -73,15 +73,15 @@ def digest(*parts: bytes) -> str:
     return h.hexdigest()
 
 
-def tree_digest(dirs) -> str:
-    """Hash of every file (path and content) below ``dirs``, caches excluded."""
+def tree_digest(dirs, base: pathlib.Path = ROOT) -> str:
+    """Hash of every file (path relative to ``base``, and content) below ``dirs``, caches excluded."""
     h = hashlib.sha256()
     for top in dirs:
         for path in sorted(top.rglob("*")):
             if "__pycache__" in path.parts or path.suffix in {".pyc", ".nbi", ".nbc"}:
                 continue
             if path.is_file():
-                h.update(str(path.relative_to(ROOT)).encode())
+                h.update(str(path.relative_to(base)).encode())
                 h.update(path.read_bytes())
     return h.hexdigest()
 

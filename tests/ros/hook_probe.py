@@ -1,10 +1,12 @@
 """A node run by ``bearing_common.node_main`` with an ``on_shutdown`` hook (signal tests).
 
 Publishes a /diagnostics status "running" every 0.1 s, and "stopped" from its hook,
-as the diagnoser does when it is stopped.
+as the diagnoser does when it is stopped. With ``--slow-start`` its construction takes
+``SLOW_START_S`` after the node is in the graph (as the diagnoser's JIT warm-up does under load).
 """
 
 import sys
+import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.duration import Duration
@@ -14,11 +16,15 @@ from bearing_common import topics
 from bearing_common.node_main import run_node_main
 
 RUNNING, STOPPED = "running", "stopped"
+SLOW_START_S = 60.0
 
 
 class HookProbe(Node):
     def __init__(self):
         super().__init__("hook_probe")
+        if "--slow-start" in sys.argv:
+            self.get_logger().info("starting slowly")
+            time.sleep(SLOW_START_S)
         self.pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
         self.create_timer(0.1, lambda: self.publish(RUNNING))
 

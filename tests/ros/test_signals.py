@@ -86,6 +86,20 @@ def test_the_whole_graph_stops_cleanly_as_one_process_group(ros_graph, mode, tmp
 
 
 @pytest.mark.parametrize("mode", MODES)
+def test_a_node_stopped_while_starting_ends_at_once(ros_graph, mode):
+    """A signal during a node's construction (the diagnoser's warm-up: seconds under load) ends the
+    start-up: exit 0 and one line, not the stall watchdog's dump after 4 s."""
+    probe = ros_graph.start("", "", name="hook_probe",
+                            argv=[sys.executable, str(REPO_ROOT / "tests" / "ros" / "hook_probe.py"), "--slow-start"])
+    ros_graph.wait_until(lambda: any("starting slowly" in line for line in probe.lines), 60.0, "the slow start")
+    sent = time.monotonic()
+    send(probe.process.pid, mode)
+    assert_clean_exit(probe)
+    assert time.monotonic() - sent < 3.0
+    assert any(f"hook_probe: {MODES[mode][0].name} while starting: stopped" in line for line in probe.lines)
+
+
+@pytest.mark.parametrize("mode", MODES)
 def test_shutdown_hook_publishes_a_last_message(ros_graph, mode):
     from hook_probe import RUNNING, STOPPED
 

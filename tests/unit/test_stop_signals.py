@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from bearing_common.stop_signals import StopSignals
+from bearing_common.stop_signals import StopRequested, StopSignals
 
 
 @pytest.fixture(autouse=True)
@@ -30,6 +30,16 @@ def test_first_signal_is_recorded_and_later_ones_ignored():
     assert stop.signal == signal.SIGTERM
 
 
+def test_a_signal_while_abort_is_set_raises_once():
+    with StopSignals() as stop:
+        stop.abort = True
+        with pytest.raises(StopRequested):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1.0)  # the handler runs here at the latest
+        os.kill(os.getpid(), signal.SIGTERM)  # a later signal while stopping only is ignored
+        assert stop.signal == signal.SIGINT
+
+
 def test_handlers_are_restored_when_no_stop_was_requested():
     with StopSignals():
         assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler
@@ -39,7 +49,7 @@ def test_handlers_are_restored_when_no_stop_was_requested():
 
 STALLING_PROCESS = """
 import os, signal, sys, time
-from bearing_common.stop_signals import StopSignals
+from bearing_common.stop_signals import StopRequested, StopSignals
 with StopSignals(stall_s=0.5) as stop:
     os.kill(os.getpid(), signal.SIGTERM)
     time.sleep(0.05)

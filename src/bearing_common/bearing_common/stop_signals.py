@@ -17,6 +17,10 @@ interpreter's exit that hangs says where, instead of waiting for SIGKILL. The cl
 when the signal arrives, even while the main thread is blocked in C code where Python's
 handler cannot run yet (a thread waits on the signal wake-up descriptor), and keeps
 running after the ``with`` block, through the process's exit.
+
+While ``abort`` is true (a node's start-up: imports, JIT warm-up, seconds of CPU), the first
+signal also raises :class:`StopRequested` in the main thread, so that the start-up ends
+instead of running on past the stall watchdog.
 """
 
 from __future__ import annotations
@@ -29,11 +33,16 @@ import threading
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
+class StopRequested(BaseException):
+    """A stop signal arrived while :attr:`StopSignals.abort` was set (not an error: no ``except Exception``)."""
+
+
 class StopSignals:
     """True once SIGINT or SIGTERM arrived (``signal`` says which came first)."""
 
     def __init__(self, stall_s: float | None = None):
         self.signal: int | None = None
+        self.abort = False  #: the first signal raises StopRequested (see the module's docstring)
         self._old = {}
         self._stall_s = stall_s
         self._wakeup: tuple[int, int] | None = None
@@ -64,6 +73,8 @@ class StopSignals:
     def _handle(self, signum, _frame) -> None:
         if self.signal is None:
             self.signal = signum
+            if self.abort:
+                raise StopRequested(signum)
 
     def __exit__(self, *exc) -> None:
         for sig, old in self._old.items():
