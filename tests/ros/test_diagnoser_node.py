@@ -64,7 +64,8 @@ def test_states_and_diagnostics_follow_the_residuals(ros_graph):
     # the window's first sample, the indicators of that window, the fault evidence or why there is none.
     ros_graph.wait_until(lambda: len(health) >= 4, 10.0, "four health messages")
     assert [m.header.stamp.nanosec for m in health[:4]] == [0, 100_000_000, 200_000_000, 300_000_000]
-    assert [m.rms for m in health[:4]] == pytest.approx([np.std(y[k * 4800:(k + 1) * 4800]) for k in range(4)],
+    y32 = y.astype(np.float32).astype(float)  # the residual travels as float32 (msg/Residual.msg)
+    assert [m.rms for m in health[:4]] == pytest.approx([np.std(y32[k * 4800:(k + 1) * 4800]) for k in range(4)],
                                                         rel=1e-9)
     assert health[3].rms > 3 * health[0].rms and health[3].kurtosis > 3 * health[0].kurtosis  # the bursts
     assert all(list(m.hypotheses) or m.evidence_problem for m in health[:4]) and health[0].learning
