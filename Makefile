@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup demo test unit lint fuzz bench accuracy soak clean
+.PHONY: setup demo test unit lint fuzz bench accuracy false-alarms soak clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -31,9 +31,16 @@ fuzz: setup
 bench: setup
 	@$(VENV_PY) benchmarks/run.py --out out/bench.md
 
-# decisions on every development recording, against the textbook baseline, with ablations
+# decisions on every development recording, against the textbook baseline, with ablations,
+# times to decision and detection curves (-> out/accuracy.md, out/detection_curves.png)
 accuracy: setup
-	@$(VENV_PY) benchmarks/accuracy_report.py --out out/accuracy.md
+	@$(VENV_PY) benchmarks/accuracy_report.py --out out/accuracy.md --figure out/detection_curves.png
+
+# false alarms of the live decision on FALSE_ALARM_HOURS (default 10) of simulated healthy signal
+# and on looped healthy recordings -> out/false_alarms.md
+FALSE_ALARM_HOURS ?= 10
+false-alarms: setup
+	@$(VENV_PY) benchmarks/false_alarms.py --hours $(FALSE_ALARM_HOURS) --out out/false_alarms.md
 
 # the whole graph at real time for SOAK_MINUTES (default 30) -> out/soak.md
 SOAK_MINUTES ?= 30

@@ -31,6 +31,8 @@ MODULES = (
     "benchmarks.bag_benchmarks",
     "benchmarks.graph_benchmarks",
     "benchmarks.fleet_benchmarks",
+    "benchmarks.message_benchmarks",
+    "benchmarks.discovery_benchmarks",
 )
 
 

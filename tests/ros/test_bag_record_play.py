@@ -175,3 +175,71 @@ def test_play_of_a_bad_bag_fails_with_one_line(ros_graph, tmp_path):
     assert player.returncode == 2
     errors = [line for line in player.lines if line.strip()]
     assert len(errors) == 1 and errors[0].startswith("bearing-bag: error:") and "no metadata.yaml" in errors[0]
+
+
+def test_play_recuts_the_vibration_into_chunks_of_the_duration_asked(ros_graph, tmp_path):
+    """--chunk-duration 0.12 s on 0.05 s chunks of 1 kHz: every sample arrives once, in chunks of
+    120 samples (the last one shorter), each stamped with its first sample's time."""
+    t0, n, dt = write_play_bag(tmp_path / "play")  # 21 chunks of 50 samples, sample values = chunk number
+    chunks = ros_graph.subscribe(topics.VIBRATION, depth=1000)
+    player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + [
+        "play", str(tmp_path / "play"), "--rate", "4", "--chunk-duration", "0.12", "--topics", topics.VIBRATION.name,
+        "--wait-for-subscribers"])
+    ros_graph.wait_until(lambda: player.returncode is not None, timeout=90.0, what="the player to finish")
+    assert player.returncode == 0, ros_graph.output()
+    ros_graph.wait_until(lambda: sum(len(c.samples) for c in chunks) >= 50 * n, timeout=10.0, what="every sample")
+    assert [len(c.samples) for c in chunks] == [120] * 8 + [90]
+    assert [c.first_sample_index for c in chunks] == [120 * k for k in range(9)]
+    stamp0 = t0 + 5 * 10**9  # stamp of sample 0; sample i at stamp0 + i ms
+    assert [c.header.stamp.sec * 10**9 + c.header.stamp.nanosec for c in chunks] == \
+        [stamp0 + 120 * k * 10**6 for k in range(9)]
+    np.testing.assert_array_equal(np.concatenate([np.asarray(c.samples) for c in chunks]),
+                                  np.repeat(np.arange(n, dtype=float), 50))
+
+
+#: Residual.msg before its arrays became float32 (a bag recorded then embeds this definition).
+RESIDUAL_FLOAT64 = """std_msgs/Header header
+float64 sample_rate
+uint64 first_sample_index
+uint8 fault_hypothesis
+string model_set
+float64 fault_frequency
+float64[] residual
+float64[] estimate
+float64[] impulse_train
+"""
+
+
+def test_play_reencodes_messages_recorded_with_an_older_definition(ros_graph, tmp_path):
+    """A bag whose Residual messages carry float64 arrays (the recorded definition and type hash)
+    plays as today's Residual: the same values in float32, every other field kept."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    store.register(get_types_from_msg(RESIDUAL_FLOAT64, topics.RESIDUAL_OUTER_RACE.msgtype))
+    T = store.types
+    values = np.array([0.1, -2.5, 1e-3, 123.456789])
+    with Writer(tmp_path / "old", version=9) as writer:
+        conn = writer.add_connection(topics.qualified("", topics.RESIDUAL_OUTER_RACE),
+                                     topics.RESIDUAL_OUTER_RACE.msgtype, typestore=store)
+        for k in range(3):
+            msg = T[topics.RESIDUAL_OUTER_RACE.msgtype](
+                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=k, nanosec=7),
+                                                frame_id="drive_end"),
+                sample_rate=48000.0, first_sample_index=4 * k, fault_hypothesis=1, model_set="sim_48k",
+                fault_frequency=107.5, residual=values + k, estimate=-values, impulse_train=np.zeros(4))
+            writer.write(conn, 10**9 + k * 10**7, store.serialize_cdr(msg, topics.RESIDUAL_OUTER_RACE.msgtype))
+    received = ros_graph.subscribe(topics.RESIDUAL_OUTER_RACE, depth=100)
+    player = ros_graph.start("", "", name="bag_play", argv=BAG_CLI + ["play", str(tmp_path / "old"),
+                                                                      "--wait-for-subscribers"])
+    ros_graph.wait_until(lambda: player.returncode is not None, timeout=90.0, what="the player to finish")
+    assert player.returncode == 0, ros_graph.output()
+    ros_graph.wait_until(lambda: len(received) >= 3, timeout=10.0, what="3 residuals")
+    for k, m in enumerate(received):
+        assert (m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id) == (k, 7, "drive_end")
+        assert (m.first_sample_index, m.fault_hypothesis, m.model_set, m.fault_frequency) == (4 * k, 1, "sim_48k",
+                                                                                              107.5)
+        np.testing.assert_array_equal(np.asarray(m.residual), (values + k).astype(np.float32))
+        np.testing.assert_array_equal(np.asarray(m.estimate), (-values).astype(np.float32))
+        assert len(m.impulse_train) == 4

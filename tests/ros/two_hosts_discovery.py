@@ -13,8 +13,9 @@ import argparse
 import statistics
 import sys
 
-from test_two_hosts import ONE_HOST, SPLITS, STARTUP_S, Run
-from two_hosts import TwoHosts, Unavailable
+from netns_hosts import TwoHosts, Unavailable
+from split_graph import STARTUP_S, Run
+from test_two_hosts import ONE_HOST, SPLITS
 
 from bearing_common import topics
 

@@ -123,10 +123,13 @@ def test_unknown_channel_in_npz(or_npz, capsys):
     assert code != 0 and "no channel 'velocity'" in err and "accel" in err
 
 
-def test_plot_writes_figures(tmp_path, capsys):
-    y = burst_train(0.3, FS, BPFO, amplitude=10.0) + white_noise(0.3, FS, 4.5e-3)
+@pytest.mark.parametrize(("model_set", "seconds"), [([], 0.3), (["--model-set", "none"], 1.0)],
+                         ids=["sim_48k", "none"])
+def test_plot_writes_figures(model_set, seconds, tmp_path, capsys):
+    """Also without a model, whose observers send no estimate and no train."""
+    y = burst_train(seconds, FS, BPFO, amplitude=10.0) + white_noise(seconds, FS, 4.5e-3)
     path = write_npz(tmp_path / "or.npz", y)
-    code, lines, err = run([path, "--plot", tmp_path / "fig"], capsys)
+    code, lines, err = run([path, "--plot", tmp_path / "fig", *model_set], capsys)
     assert code == 0, err
     names = sorted(p.name for p in (tmp_path / "fig").iterdir())
     assert names == ["acceleration_states.png", "residual_inner_race.png", "residual_outer_race.png",

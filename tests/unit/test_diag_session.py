@@ -107,3 +107,36 @@ def test_an_observer_known_to_be_deployed_is_waited_for_at_start():
                 out += s.on_residual(h, k / fs, k, fs, c, np.zeros_like(c), np.zeros_like(c),
                                      fault_frequency(CATALOG["6205"], h, 1800.0), "sim_48k", now=0.0)
         assert out and ({r.state for r in out} == {o}) == ok, sorted({(r.state.name, r.detail) for r in out})
+
+
+def test_each_front_end_takes_the_false_alarm_budget_it_states():
+    """false_alarm_rate (per hour) shapes the spectral decision, false_alarm_probability (per window)
+    the fold decision; neither silently sets the other's, and the log line says the one in use."""
+    s, logged = session(rpm=1797.0, false_alarm_rate=0.01, false_alarm_probability=1e-3)
+    spectral = s.decision_config("none")
+    assert spectral.front_end.false_alarm_rate == 0.01
+    fold = s.decision_config("sim_12k")
+    assert fold.pfa == 1e-3 and fold.front_end == fold.front_end.with_false_alarm_rate(0.01)
+    feed(s)
+    assert any("0.01 per hour" in text for _, text in logged)
+    default, _ = session()
+    assert default.decision_config("none").front_end.false_alarm_rate == 1e-3
+
+
+def test_a_measured_speed_beyond_the_told_tolerance_is_used_and_warned():
+    """A shaft running 12 % faster than its nameplate (within twice the 10 % tolerance, plainly
+    measured from its 1x line and harmonics; 15 % would put it at a quarter of the ball comb's
+    2·BSF, which is never taken for the shaft): the scores carry both speeds, /diagnostics warns."""
+    fr = 1.12 * 1797.0 / 60.0
+    t = np.arange(int(4.0 * FS)) / FS
+    x = sum(np.sin(2 * np.pi * k * fr * t + k) / k for k in range(1, 7))
+    x = x + np.random.default_rng(2).normal(0.0, 0.05, t.size)
+    s, logged = session(rpm=1797.0)
+    reports = [r for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE) for r in
+               s.on_residual(h, 0.0, 0, FS, x, None, None, 100.0, "none", 0.0)]
+    last = reports[-1].scores.as_dict()
+    assert abs(last["speed_hz"] - fr) < 0.01 * fr and last["told_speed_hz"] == pytest.approx(1797.0 / 60.0)
+    assert last["speed_disagrees"] == 1.0
+    health = s.health(0.1)
+    assert health.level == LEVEL_WARN and "disagrees with the told 1797.0 rpm" in health.message
+    assert any(level == "warning" and "disagrees" in text for level, text in logged)

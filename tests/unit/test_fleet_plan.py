@@ -1,10 +1,10 @@
-"""Fleet files and the processes they give (bearing_bringup.fleet, no ROS graph)."""
+"""Fleet files and the processes they give (bearing_bringup.fleet_plan, no ROS graph)."""
 
 import pytest
 import yaml
 
 from bearing_bringup import multi_node_process
-from bearing_bringup.fleet import FleetError, default_fleet_file, load_fleet, parameters_file, processes
+from bearing_bringup.fleet_plan import FleetError, default_fleet_file, load_fleet, parameters_file, processes
 from bearing_bringup.graph import GRAPH, config_path, single_graph
 from bearing_common import topics
 
@@ -49,7 +49,29 @@ def test_settings_reach_only_the_nodes_that_use_them_and_node_sections_override(
     assert p["ir_observer"]["rpm"] == 1750.0
 
 
+def test_external_sensors_send_0_1_s_chunks_simulated_ones_the_simulators_and_staleness_follows(tmp_path):
+    path = fleet_yaml(tmp_path, motors={"ext": {"sensor": "external"}, "slow": {"sensor": "external",
+                                                                              "chunk_duration": 1},
+                                        "sim": {}, "sim_big": {"chunk_duration": 0.5}})
+    fleet = load_fleet(path)
+    ext, slow, sim, sim_big = fleet.motors
+    assert (ext.chunk_duration, slow.chunk_duration, sim.chunk_duration, sim_big.chunk_duration) == (0.1, 1.0, 0.01,
+                                                                                                   0.5)
+    assert sim.parameters["simulator"]["chunk_duration"] == 0.01  # config/monitor.yaml: the thesis' cases
+    assert sim_big.parameters["simulator"]["chunk_duration"] == 0.5
+    assert "chunk_duration" not in ext.parameters["or_observer"]
+    # residuals come one chunk apart: STALE needs 3 chunks without one (monitor.yaml's 1 s otherwise)
+    stale = [m.parameters["diagnoser"]["stale_timeout"] for m in fleet.motors]
+    assert stale == [1.0, 3.0, 1.0, 1.5]
+    assert "stale_timeout" not in fleet.fleet_parameters  # its default, 5 s, is above 3 of the longest chunks
+    longest = load_fleet(fleet_yaml(tmp_path, motors={"m": {"sensor": "external", "chunk_duration": 2.0}}))
+    assert longest.fleet_parameters["stale_timeout"] == 6.0
+
+
 @pytest.mark.parametrize("doc, message", [
+    ({"motors": {"m": {"sensor": "external", "chunk_duration": 0}}}, "m.chunk_duration: expected a positive number"),
+    ({"motors": {"m": {"sensor": "external", "chunk_duration": "1s"}}}, "m.chunk_duration: expected a positive"),
+    ({"motors": {"m": {"chunk_duration": -0.1}}}, r"m.simulator.chunk_duration: must be > 0"),
     ({"layout": "threads", "motors": {"m": {}}}, "layout must be one of role, motor, node"),
     ({"motors_per_process": 0, "motors": {"m": {}}}, "motors_per_process must be a positive integer"),
     ({"colour": "red", "motors": {"m": {}}}, "unknown keys colour"),

@@ -142,7 +142,8 @@ def test_vibration_callback_survives_anything_and_keeps_serving(chunks, fault):
         x, _, _ = _arrays(dict(c, ragged=False), rng)
         out = session.on_chunk(c["stamp"], c["first_index"], c["rate"], c["source"], x)
         if out is not None:
-            assert all(np.all(np.isfinite(a)) and a.size == x.size for a in (out.residual, out.estimate))
+            assert all(np.all(np.isfinite(a)) and a.size == x.size
+                       for a in (out.residual, out.estimate, out.impulse_train) if a is not None)
     refused = session.counts["rejected"] + session.counts["no model"]
     assert (refused > 0) == any(level in ("warning", "error") and "bearing" not in text for level, text in logged)
     # good input afterwards: a fresh stream (index 0, later stamp) is observed

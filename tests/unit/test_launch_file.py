@@ -4,7 +4,7 @@
 with the real call signatures (keyword names checked: a misspelt or unknown argument is a
 TypeError, as it would be in launch) are put in ``sys.modules``; they record what the launch
 files pass, and the tests check it against ``bearing_bringup.graph.GRAPH`` and, for the
-fleet, against the processes ``bearing_bringup.fleet`` plans (what ``bearing-graph --fleet`` runs).
+fleet, against the processes ``bearing_bringup.fleet_plan`` plans (what ``bearing-graph --fleet`` runs).
 """
 
 import importlib
@@ -17,7 +17,7 @@ import types
 import pytest
 import yaml
 
-from bearing_bringup.fleet import load_fleet, parameters_file, processes
+from bearing_bringup.fleet_plan import load_fleet, parameters_file, processes
 from bearing_bringup.graph import CONFIG_NAME, FLEET_CONFIG_NAME, GRAPH
 from bearing_bringup.restart_policy import MAX_RESTARTS, RESTART_DELAY_S
 

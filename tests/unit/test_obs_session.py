@@ -47,9 +47,10 @@ def test_outputs_equal_the_offline_observer_and_the_set_follows_source_and_rate(
     assert_allclose(np.concatenate([o.residual for o in outs]), ref.residual, rtol=0, atol=0)
     assert {o.model_set for o in outs} == {"sim_48k"}
     assert outs[0].fault_frequency == pytest.approx(load_model_set("sim_48k")["outer_race"].fault_order * 30.0)
-    # a source and rate without a shipped set: none, the measurement passed through
+    # a source and rate without a shipped set: none, the measurement passed through, no estimate, no train
     out = s.feed(0, y[:N], fs=25600.0, source="my_sensor")
-    assert out.model_set == "none" and np.array_equal(out.residual, y[:N]) and not out.estimate.any()
+    assert out.model_set == "none" and np.array_equal(out.residual, y[:N])
+    assert out.estimate is None and out.impulse_train is None
     assert out.fault_frequency == pytest.approx(CATALOG["6205"].frequencies(1800.0).bpfo)
     assert s.feed(0, y[:N], source="cwru", fs=12000.0).model_set == "cwru_de_6205"
     assert [t for lv, t in s.lines if t.startswith("model set")] == [

@@ -37,7 +37,7 @@ import yaml
 from bearing_common import ros_env, topics
 from bearing_common.stop_signals import StopSignals
 
-from .fleet import FleetError, default_fleet_file, load_fleet, parameters_file, processes
+from .fleet_plan import FleetError, default_fleet_file, load_fleet, parameters_file, processes
 from .graph import CONFIG_NAME, config_path, single_graph
 from .process_group import ProcessGroup
 from .restart_policy import MAX_RESTARTS, RESTART_DELAY_S, RestartPolicy

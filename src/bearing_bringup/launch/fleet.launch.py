@@ -2,7 +2,7 @@
 
     ros2 launch bearing_bringup fleet.launch.py [fleet_file:=FILE] [motors:=N]
 
-The processes are bearing_bringup.fleet.processes(), the ones `bearing-graph --fleet` runs:
+The processes are bearing_bringup.fleet_plan.processes(), the ones `bearing-graph --fleet` runs:
 every motor's graph in its own namespace, laid out as the fleet file says, and the fleet
 node. The parameters of every node are written to one file keyed by fully qualified node
 names (a temporary directory). Every process but a simulator is respawned when it dies
@@ -19,7 +19,7 @@ from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch_ros.actions import Node
 
-from bearing_bringup.fleet import load_fleet, parameters_file, processes
+from bearing_bringup.fleet_plan import load_fleet, parameters_file, processes
 from bearing_bringup.graph import FLEET_CONFIG_NAME
 from bearing_bringup.restart_policy import MAX_RESTARTS, RESTART_DELAY_S
 

@@ -135,9 +135,12 @@ def evaluate(record: LabelledRecording, method: str = "model", speed_told: bool 
 
 
 def totals(results: list[RecordResult]) -> dict:
-    """Per data set: faults right / fault records, healthy records without alarm / healthy records."""
+    """Per data set: faults right / fault records (race and ball), healthy records without alarm /
+    healthy records, and of the ball records those named BALL and those called a race fault."""
     out: dict = defaultdict(lambda: {"faults": 0, "faults_right": 0, "healthy": 0, "healthy_clean": 0,
-                                     "alarm_windows": 0, "healthy_windows": 0})
+                                     "alarm_windows": 0, "healthy_windows": 0, "ball": 0, "ball_right": 0,
+                                     "ball_called_race": 0})
+    races = (FaultState.OUTER_RACE, FaultState.INNER_RACE)
     for r in results:
         t = out[r.record.dataset]
         if r.record.truth == FaultState.NORMAL:
@@ -148,6 +151,10 @@ def totals(results: list[RecordResult]) -> dict:
         else:
             t["faults"] += 1
             t["faults_right"] += int(r.correct)
+        if r.record.truth == FaultState.BALL:
+            t["ball"] += 1
+            t["ball_right"] += int(r.correct)
+            t["ball_called_race"] += int(r.state in races)
     return dict(out)
 
 
@@ -196,11 +203,13 @@ def markdown(results: list[RecordResult], methods=("model", "envelope")) -> str:
             cells += [_cell(r) if r else "-", f"{r.decided_at:.2f} s" if r and r.decided_at is not None else "-"]
         label = f"{name} ({note})" if note else name
         lines.append(f"| {dataset} | {label} | {truth} | " + " | ".join(cells) + " |")
-    lines += ["", "| data set | method | faults diagnosed | healthy records without alarm | alarm windows on healthy |",
-              "|---|---|---|---|---|"]
+    lines += ["", "| data set | method | race faults diagnosed | ball records: named BALL, called a race fault "
+              "| healthy records without alarm | alarm windows on healthy |", "|---|---|---|---|---|---|"]
     for m in methods:
         for dataset, t in totals([r for r in results if r.method == m]).items():
-            lines.append(f"| {dataset} | {m} | {t['faults_right']}/{t['faults']} | {t['healthy_clean']}/{t['healthy']} "
+            race, race_right = t["faults"] - t["ball"], t["faults_right"] - t["ball_right"]
+            ball = f"{t['ball_right']}/{t['ball']}, {t['ball_called_race']}/{t['ball']}" if t["ball"] else "-"
+            lines.append(f"| {dataset} | {m} | {race_right}/{race} | {ball} | {t['healthy_clean']}/{t['healthy']} "
                          f"| {t['alarm_windows']}/{t['healthy_windows']} |")
     lines += ["", "| published confidence | fault states: windows | share right | NORMAL: windows | share right |",
               "|---|---|---|---|---|"]

@@ -17,8 +17,11 @@ PARAMETERS = (
                   lambda v: None if 0.0 < v < 0.5 else "must be in (0, 0.5)", dynamic=True),
     ParameterSpec("window", 0.0, "analysis window (s); 0 = derived: 4 cage periods of the bearing (real "
                   "machines), the model set's default (simulator)", non_negative, dynamic=True),
-    ParameterSpec("false_alarm_probability", 0.0, "false-alarm probability per window on Gaussian noise that "
-                  "sets the detection thresholds; 0 = the model set's default (1e-4)",
+    ParameterSpec("false_alarm_rate", 0.0, "false alarms per hour of healthy operation (Gaussian noise) that "
+                  "the spectral decision (real machines) may give; 0 = its default (1e-3)",
+                  lambda v: None if 0 <= v < 3600 else "must be in [0, 3600)", dynamic=True),
+    ParameterSpec("false_alarm_probability", 0.0, "false-alarm probability per window and hypothesis of the "
+                  "fold decision (the simulator's model sets); 0 = its default (1e-4)",
                   lambda v: None if 0 <= v < 0.5 else "must be in [0, 0.5)", dynamic=True),
     ParameterSpec("sensor_bandwidth", 0.0, "usable bandwidth of the sensor chain (Hz); 0 = up to 0.45 x the "
                   "sample rate", non_negative, dynamic=True),
@@ -31,8 +34,8 @@ PARAMETERS = (
 )
 
 #: Parameters whose change restarts the decision (new windows, thresholds or hypotheses).
-RESTART_ON = ("bearing", "model_set", "rpm", "rpm_tolerance", "window", "false_alarm_probability",
-              "sensor_bandwidth")
+RESTART_ON = ("bearing", "model_set", "rpm", "rpm_tolerance", "window", "false_alarm_rate",
+              "false_alarm_probability", "sensor_bandwidth")
 
 # diagnostic_msgs/DiagnosticStatus levels (OK=0, WARN=1, ERROR=2, STALE=3) per published state.
 LEVEL_OK, LEVEL_WARN, LEVEL_ERROR, LEVEL_STALE = 0, 1, 2, 3

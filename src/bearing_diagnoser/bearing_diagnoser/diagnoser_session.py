@@ -125,6 +125,7 @@ class DiagnoserSession:
         self.last_report: StateReport | None = None
         self.sensor_problem = ""
         self.speed_problem = ""
+        self.speed_warning = ""  # the last window's measured speed disagreed with the told one
         self.decision_problem = ""  # why the last chunk could not be decided on (cleared by a good one)
         self.last_refusal = ""  # why the last refused chunk was refused
         self.rejected_speeds = 0
@@ -151,15 +152,16 @@ class DiagnoserSession:
     def decision_config(self, model_set: str) -> DiagnoserConfig:
         """The decision's configuration for residuals of ``model_set``: the one given at construction,
         else the defaults of the ``model_set`` parameter (or of the residuals' set) with the
-        ``false_alarm_probability``, ``window`` and ``sensor_bandwidth`` parameters applied."""
+        ``false_alarm_rate``, ``false_alarm_probability``, ``window`` and ``sensor_bandwidth``
+        parameters applied (each front end takes the false-alarm budget it states)."""
         if self._config is not None:
             return self._config
         v = self.values
         cfg = config_for(v["model_set"] or model_set)
         if v["false_alarm_probability"] > 0:
             cfg = replace(cfg, pfa=float(v["false_alarm_probability"]))
-        return replace(cfg, usable_bandwidth=float(v["sensor_bandwidth"]),
-                       front_end=cfg.front_end.with_window(float(v["window"])))
+        front_end = cfg.front_end.with_window(float(v["window"])).with_false_alarm_rate(float(v["false_alarm_rate"]))
+        return replace(cfg, usable_bandwidth=float(v["sensor_bandwidth"]), front_end=front_end)
 
     def _make_core(self, model_set: str, sample_rate: float) -> Diagnoser:
         name = self.values["model_set"] or model_set
@@ -169,8 +171,8 @@ class DiagnoserSession:
         core.expected = set(self.deployed)
         self._tell_speed(core)
         self._log("info", f"deciding with the {cfg.method} front end ({name or 'no'} model set), bearing "
-                          f"{core.bearing.name}, {cfg.front_end.describe_window()}, false-alarm probability "
-                          f"{cfg.pfa:g} per window")
+                          f"{core.bearing.name}, {cfg.front_end.describe_window()}, "
+                          f"{cfg.front_end.describe_false_alarms(cfg.pfa)}")
         if self.speed_unknown_for(cfg):
             self._log("warning", SPEED_UNKNOWN)
         return core
@@ -266,6 +268,9 @@ class DiagnoserSession:
     def _account(self, d: Decision) -> bool:
         """Remember a window's sensor verdict; True when its state is to be published."""
         self.sensor_problem, self.speed_problem = d.sensor_problem, d.speed_problem
+        self.speed_warning = d.scores.speed_warning()
+        if self.speed_warning:
+            self._log_repeatable("speed disagrees", "warning", self.speed_warning)
         return d.diagnosed
 
     def _report(self, d: Decision) -> StateReport:
@@ -306,6 +311,8 @@ class DiagnoserSession:
             level, message = max(level, LEVEL_WARN), f"not diagnosed: {self.speed_problem}"
         elif self.speed_unknown:
             level, message = max(level, LEVEL_WARN), f"{message} ({SPEED_UNKNOWN})"
+        elif self.speed_warning:
+            level, message = max(level, LEVEL_WARN), f"{message} ({self.speed_warning})"
         if silent:
             level = max(level, LEVEL_WARN)
             message += " (waiting for " + ", ".join(silent) + ")"

@@ -61,7 +61,8 @@ class DiagnoserNode(Node):
         if len(self.session.deployed) < len(self.residual_subscriptions):  # until every observer is known
             self.session.expect(h for h, sub in self.residual_subscriptions.items() if sub.get_publisher_count())
         reports = self.session.on_residual(hypothesis, to_seconds(msg.header.stamp), msg.first_sample_index,
-                                           msg.sample_rate, msg.residual, msg.estimate, msg.impulse_train,
+                                           msg.sample_rate, msg.residual, msg.estimate or None,
+                                           msg.impulse_train or None,
                                            msg.fault_frequency, msg.model_set, self._now())
         for report in reports:
             self.publish_state(report)

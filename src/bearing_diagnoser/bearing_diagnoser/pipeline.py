@@ -118,7 +118,8 @@ class MonitorPipeline:
                     raise InputError(f"the {h.label} observer cannot process this recording: "
                                      f"{dict(self.observers[h].counts)}")
                 for key, parts in self.kept.get(h, {}).items():
-                    parts.append(getattr(out, key))
+                    part = getattr(out, key)  # None without a model: no estimate (0), no train
+                    parts.append(np.zeros_like(out.residual) if part is None else part)
                 self._decide(h, stamp, first_index, sample_rate, out.residual, out.estimate, out.impulse_train,
                              out.fault_frequency, out.model_set)
             else:

@@ -3,12 +3,14 @@
     ros2 run bearing_observer observer --ros-args -p fault_type:=outer_race -p bearing:=6205
 
 Subscribes ``vibration/drive_end`` and ``shaft_speed``; publishes ``residual/outer_race``
-or ``residual/inner_race`` (Residual: residual, estimate and the impulse train used,
-stamped with the input chunk's stamp). Parameters (``observer_node_config``): ``bearing``,
-``model_set``, ``rpm`` and ``speed_tolerance`` apply when set; ``fault_type`` is
-read-only. What happens to each message is :class:`.observer_session.ObserverSession`'s.
+or ``residual/inner_race`` (Residual: residual, estimate and the impulse train used, in
+float32, the last two empty without a model; stamped with the input chunk's stamp).
+Parameters (``observer_node_config``): ``bearing``, ``model_set``, ``rpm`` and
+``speed_tolerance`` apply when set; ``fault_type`` is read-only. What happens to each
+message is :class:`.observer_session.ObserverSession`'s.
 """
 
+import array
 import sys
 
 import numpy as np
@@ -64,10 +66,17 @@ class ObserverNode(Node):
                        fault_hypothesis=int(self.session.fault), model_set=out.model_set,
                        fault_frequency=out.fault_frequency)
         res.header = msg.header
-        res.residual = out.residual.tolist()
-        res.estimate = out.estimate.tolist()
-        res.impulse_train = out.impulse_train.tolist()
+        res.residual = float32_array(out.residual)
+        if out.estimate is not None:  # else empty: no model (Residual.msg)
+            res.estimate = float32_array(out.estimate)
+            res.impulse_train = float32_array(out.impulse_train)
         self.pub.publish(res)
+
+
+def float32_array(x: np.ndarray) -> array.array:
+    """``x`` as the array.array('f') a float32[] message field takes as it is (one copy, no
+    per-element checks; a list would be converted and checked element by element)."""
+    return array.array("f", np.asarray(x, dtype=np.float32).tobytes())
 
 
 def main(args=None) -> int:

@@ -10,7 +10,10 @@ One :class:`ObserverSession` per node:
   ``speed_tolerance`` (relative), phase kept continuous;
 * checks every chunk (:class:`bearing_common.chunk_stream.ChunkStream`): bad chunks are rejected and
   counted; a gap or a restarted producer resets the observer state;
-* never returns a non-finite value.
+* never returns a non-finite value;
+* without a model (model set ``none``) passes the measurement through as the residual and
+  computes nothing else: the estimate is 0 and no train drives a model, so both are left
+  out (None; empty arrays on the wire, ``msgs/msg/Residual.msg``).
 
 Messages go to ``log(level, text)`` with ``level`` ``info``, ``warning`` or ``error``;
 repeatable per-chunk messages (rejections, bad speeds, no model) at most once per
@@ -32,17 +35,18 @@ from bearing_common.log_throttle import LogThrottle
 from bearing_common.states import FaultState
 
 from .hw_model import ModelFileError
-from .model_sets import choose_model_set
+from .model_sets import NONE, choose_model_set
 from .observer import BearingMismatchWarning, FaultObserver
 
 
 @dataclass
 class ResidualChunk:
-    """The observer's output for one accepted chunk (arrays as long as the chunk)."""
+    """The observer's output for one accepted chunk (arrays as long as the chunk; estimate
+    and train None when the observer has no model: the residual is the measurement)."""
 
     residual: np.ndarray     # y - estimate, m/s²
-    estimate: np.ndarray     # m/s²
-    impulse_train: np.ndarray  # dimensionless
+    estimate: np.ndarray | None     # m/s²
+    impulse_train: np.ndarray | None  # dimensionless
     model_set: str
     fault_frequency: float   # Hz
 
@@ -136,8 +140,12 @@ class ObserverSession:
             return None
         if verdict.resync:
             self.observer.reset()
-            if verdict.reason:
-                self.log("info", verdict.reason)
+            if verdict.reason:  # throttled: an overloaded host drops chunks, and a log line per gap
+                # (1-4 ms in rclpy) made it fall further behind
+                self._log_repeatable("resync", "info", verdict.reason)
+        name, frequency = self._built_for[0], float(self.observer.fault_frequency)
+        if name == NONE:
+            return ResidualChunk(samples, None, None, name, frequency)
         out = self.observer.process(samples)
         if not (np.all(np.isfinite(out.residual)) and np.all(np.isfinite(out.estimate))):
             self.counts["non-finite output"] += 1
@@ -145,8 +153,7 @@ class ObserverSession:
             self.stream.restart()
             self.log("error", "observer produced non-finite values; state reset, chunk dropped")
             return None
-        return ResidualChunk(out.residual, out.estimate, out.impulse_train, self._built_for[0],
-                             float(self.observer.fault_frequency))
+        return ResidualChunk(out.residual, out.estimate, out.impulse_train, name, frequency)
 
     def _ensure_observer(self, source: str, sample_rate: float) -> bool:
         """Build the observer the chunk needs unless it runs already; False when none can be."""

@@ -3,7 +3,7 @@ for machines without ``ros2 bag`` (the PyPI ROS 2 wheels do not include rosbag2)
 
     bearing-bag record [--topics T ...] [--namespace NS] [--storage mcap|sqlite3] [--duration S] --out BAG_DIR
     bearing-bag play BAG_DIR [--rate R] [--clock] [--topics T ...] [--loop] [--delay S]
-                     [--wait-for-subscribers [N]] [--namespace NS]
+                     [--wait-for-subscribers [N]] [--namespace NS] [--chunk-duration S]
     bearing-bag info BAG_DIR
     bearing-bag from-mat FILE.mat [--sample-rate HZ] [--channel NAME] [--rpm RPM] [--bearing NAME|FILE.yaml]
                          [--units g|m/s2] [--chunk-duration 0.01] [--start-time 0] [--duration S]
@@ -48,6 +48,9 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--wait-for-subscribers", type=int, nargs="?", const=1, default=0, metavar="N",
                     help="before playing, wait (up to 60 s) until every played topic has N subscribers (default 1)")
     pl.add_argument("--namespace", default=None, help="republish the graph topics under this namespace")
+    pl.add_argument("--chunk-duration", type=float, metavar="S",
+                    help="publish the vibration in chunks of S seconds, as a sensor sending such chunks would "
+                         "(sample indices and stamps kept exactly; default: as recorded)")
 
     i = sub.add_parser("info", help="topics, types, message counts, duration, storage")
     i.add_argument("bag", metavar="BAG_DIR")
@@ -138,7 +141,7 @@ def main(argv=None) -> int:
             from .bag_play import play
             play(args.bag, rate=args.rate, clock=args.clock, names=args.topics, loop=args.loop, log=_say,
                  delay=args.delay, namespace=args.namespace,
-                 wait_for_subscribers=args.wait_for_subscribers)
+                 wait_for_subscribers=args.wait_for_subscribers, chunk_duration=args.chunk_duration)
     except (BagError, InputError, BearingError) as exc:
         print(f"bearing-bag: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -82,3 +82,41 @@ def store_name() -> str:
     distro = ros_env.ros_distro()
     name = f"ROS2_{distro.upper()}" if distro else "LATEST"
     return name if name in Stores.__members__ else "LATEST"
+
+
+#: numpy element types of the ros2msg numeric base types (rosbags holds such sequences as arrays).
+_NUMPY_TYPES = {"float32": "float32", "float64": "float64", "int8": "int8", "uint8": "uint8", "int16": "int16",
+                "uint16": "uint16", "int32": "int32", "uint32": "uint32", "int64": "int64", "uint64": "uint64",
+                "byte": "uint8", "char": "uint8", "octet": "uint8"}
+
+
+def convert_message(msg, msgtype: str, store):
+    """A message decoded with another definition of ``msgtype`` (an older bag's) as ``store``'s
+    ``msgtype``: fields of the same name are copied (nested messages converted, numeric
+    arrays cast to the new element type, e.g. float64 -> float32), fields the old
+    definition lacks take their defaults (0, "", empty)."""
+    _consts, fields = store.fielddefs[msgtype]
+    values = {name: _convert_field(getattr(msg, name, None), kind, detail, store) for name, (kind, detail) in fields}
+    return store.types[msgtype](**values)
+
+
+def _convert_field(value, kind, detail, store):
+    import numpy as np
+    from rosbags.interfaces import Nodetype
+    if kind == Nodetype.NAME:
+        return convert_message(value if value is not None else _Absent(), detail, store)
+    if kind == Nodetype.BASE:
+        name = detail[0]
+        if value is not None:
+            return value
+        return "" if name in ("string", "wstring") else (False if name == "bool" else 0)
+    (elem_kind, elem), size = detail  # ARRAY (fixed size) or SEQUENCE
+    length = size if kind == Nodetype.ARRAY else 0  # of an absent field
+    if elem_kind == Nodetype.BASE and elem[0] in _NUMPY_TYPES:
+        dtype = _NUMPY_TYPES[elem[0]]
+        return np.zeros(length, dtype) if value is None else np.asarray(value, dtype=dtype)
+    return [_convert_field(v, elem_kind, elem, store) for v in ([None] * length if value is None else value)]
+
+
+class _Absent:
+    """A nested message the old definition did not have: every field missing."""

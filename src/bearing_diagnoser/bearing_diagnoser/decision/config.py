@@ -36,6 +36,13 @@ class FrontEndSettings(Protocol):
     def describe_window(self) -> str:
         """The window, for a log line."""
 
+    def with_false_alarm_rate(self, per_hour: float):
+        """These settings with a false-alarm budget of ``per_hour`` per hour of healthy operation
+        (0: the front end's own); a front end whose budget is per window (``pfa``) ignores it."""
+
+    def describe_false_alarms(self, pfa: float) -> str:
+        """The false-alarm budget in use (``pfa``: the configuration's, per window), for a log line."""
+
     def textbook(self):
         """The textbook squared-envelope-spectrum reference of these settings (``--method envelope``)."""
 
@@ -53,8 +60,10 @@ class DiagnoserConfig:
     front_end : SpectralSettings or FoldSettings
         The front end and its settings (module docstring).
     pfa : float
-        False-alarm probability per window on Gaussian noise: spectral, for all hypotheses
-        together; fold, per hypothesis (its thresholds come from its calibration).
+        False-alarm probability per window and hypothesis on Gaussian noise of the fold front
+        end (its thresholds come from its calibration). The spectral front end states its
+        budget per hour instead (:attr:`.spectral.settings.SpectralSettings.false_alarm_rate`)
+        and does not use ``pfa``.
     k_of_n : (k, n)
         Hysteresis: a new state needs k of the last n window labels. The first window sets
         the initial state directly (unless it is UNKNOWN).

@@ -52,6 +52,10 @@ class WindowScores:
                 out[f"{h.label}_xcorr"] = self.xcorr[h]
         return out
 
+    def speed_warning(self) -> str:
+        """Why the speed the window used is not the told one ("" when it is, or none was measured)."""
+        return ""
+
     def as_dict(self) -> dict[str, float]:
         """Every number by its published name."""
         out = {h.label: v for h, v in self.significance.items()}

@@ -91,6 +91,13 @@ class FoldSettings:
     def describe_window(self) -> str:
         return f"window {self.window_s:g} s"
 
+    def with_false_alarm_rate(self, per_hour: float) -> FoldSettings:
+        """Unchanged: the fold front end's budget is the configuration's ``pfa`` per window."""
+        return self
+
+    def describe_false_alarms(self, pfa: float) -> str:
+        return f"false-alarm probability {pfa:g} per window and hypothesis"
+
     def textbook(self) -> FoldSettings:
         """The envelope spectrum at the fault harmonics instead of folding, no explain-away (masking
         impact phases would itself put a comb into the envelope spectrum), windows of at least

@@ -38,7 +38,7 @@ import numpy as np
 from bearing_common.states import FaultState
 
 from .envelope_spectrum import band_kurtosis, band_ses, normalise
-from .fault_combs import comb_evidence, sidebands_carry, stands_out, term_frequencies
+from .fault_combs import comb_evidence, highest_term, recent_run_evidence, sidebands_carry, stands_out, term_frequencies
 from .significance import averaged_median
 
 
@@ -119,7 +119,7 @@ class Accumulation:
         g, k = self.geometry, self.windows
         level = averaged_median(k)[1]
         z = [normalise(s / k, level=level) for s in self._sums]
-        rows = self._rows()
+        rows = self._stack(z, self._rows())
         n_bands = (self.n_bands if self.criterion == "evidence" else 1) * tests
         found = {h: e for h in g.terms if (e := self._best(z, rows, h, n_bands)) is not None}
         if len(found) > 1:  # the others without the strongest one's lines
@@ -138,27 +138,42 @@ class Accumulation:
         j = int(np.argmax(self._kurtosis[i]))
         return [(i, slice(j, j + 1))]
 
+    def _stack(self, z: list, rows: list) -> list:
+        """``rows`` as (stacked spectra, [(group, row)] of each): the groups' rows in one array, cut to
+        the shortest group's bins, when every comb term at every searched scale lies below that (so
+        that the comb sums are the groups' own); else one entry per group."""
+        g = self.geometry
+        parts = [z[i][sel] for i, sel in rows]
+        length = min(p.shape[1] for p in parts)
+        top_bin = int(np.ceil(highest_term(g.terms, g.rho[1]) * g.fr / self.df)) + 2
+        index = [(i, r) for i, sel in rows for r in np.arange(len(z[i]))[sel]]
+        if len(parts) > 1 and top_bin < length:
+            return [(np.concatenate([p[:, :length] for p in parts]), index)]
+        return [(p, [(i, r) for i, r in index if i == gi]) for p, (gi, _) in zip(parts, rows)]
+
     def _best(self, z: list, rows: list, h: FaultState, n_bands: int, exclude=()) -> HorizonEvidence | None:
         g = self.geometry
         best = None
-        for i, sel in rows:
-            lp, rho, s, j = comb_evidence(z[i][sel], self.df, g.fr, {h: g.terms[h]}, g.rho, self.mask_shaft, n_bands,
+        for spectra, index in rows:
+            lp, rho, s, j = comb_evidence(spectra, self.df, g.fr, {h: g.terms[h]}, g.rho, self.mask_shaft, n_bands,
                                           self.windows, exclude)[h]
             r = int(np.argmin(lp))
             if best is None or lp[r] < best[0].log10p:
-                band = self.bands[i][sel][r]
+                i, row = index[r]
+                band = self.bands[i][row]
                 best = HorizonEvidence(float(lp[r]), float(rho[r]), (float(band[0]), float(band[1])), float(s[r]),
-                                       int(j[r])), z[i][sel][r]
+                                       int(j[r])), z[i][row]
         if best is None:
             return None
         e, row = best
+        if e.log10p == 0.0:  # no evidence: nothing to tell apart
+            return e
         distinct = stands_out(row, self.df, g.fr, g.terms[h], g.rho, e.log10p - np.log10(n_bands), self.mask_shaft,
                               self.windows)
         if h == FaultState.BALL:
             distinct = distinct and sidebands_carry(row, self.df, g.fr, g.terms[h], e.rho, self.mask_shaft,
                                                     self.windows)
         return e if distinct else HorizonEvidence(0.0, e.rho, e.band, e.statistic, e.terms)
-
 
 class LongHorizon:
     """Two accumulations staggered by ``max_windows``/2 (module docstring)."""
@@ -228,18 +243,16 @@ class LongHorizon:
         acc = self._open[0]
         i, row = next((i, j) for i, g in enumerate(acc.bands) for j, b in enumerate(g)
                       if b[0] == evidence.band[0] and b[1] == evidence.band[1])
-        g = acc.geometry
         held = list(self._recent)
-        best, since = 0.0, held[0][0] if held else acc.start
-        total = np.zeros_like(held[-1][1][i][row]) if held else None
-        for k, (start, spectra) in enumerate(reversed(held), start=1):  # the last k windows
-            total = total + spectra[i][row]
-            z = normalise(total / k, level=averaged_median(k)[1])
-            lp = comb_evidence(z, acc.df, g.fr, {hypothesis: g.terms[hypothesis]}, g.rho, self.mask_shaft, 1,
-                               k)[hypothesis][0][0]
-            if lp < best:
-                best, since = lp, start
-        return since
+        if not held:
+            return acc.start
+        runs = np.arange(1, len(held) + 1)  # the last k windows, k = 1, 2, ...
+        totals = np.cumsum([spectra[i][row] for _, spectra in reversed(held)], axis=0)
+        levels = np.array([averaged_median(k)[1] for k in runs])[:, None]
+        lp = recent_run_evidence(normalise(totals / runs[:, None], level=levels), acc.df, acc.geometry,
+                                 hypothesis, self.mask_shaft)
+        strongest = int(np.argmin(lp))  # the first of equals: the shortest run
+        return held[len(held) - 1 - strongest][0] if lp[strongest] < 0.0 else held[0][0]
 
     def evidence(self) -> dict:
         """{hypothesis: HorizonEvidence}: the stronger of the two accumulations, paying for both."""

@@ -315,6 +315,8 @@ class EvidenceStream:
                                                        exclude=held).items():
                 evidence[h] = CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
         for h, e in evidence.items():  # distinct evidence only (:mod:`.accumulation`)
+            if e.log10p == 0.0:
+                continue
             distinct = stands_out(z, df, fr, self.terms[h], self.rho, e.log10p - np.log10(self.band.candidates),
                                   s.mask_shaft)
             if h == FaultState.BALL:

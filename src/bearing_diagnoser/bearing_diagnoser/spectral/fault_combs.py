@@ -112,40 +112,78 @@ def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[f
     frequencies (Hz) another explanation holds; a term within 1.5 bins of one is not used.
     """
     z = np.atleast_2d(z)
-    m, nb = z.shape
     out = {}
     for h, t in terms.items():
         if len(t) == 0:
-            out[h] = (np.zeros(m), np.ones(m), np.zeros(m), np.zeros(m, int))
+            out[h] = (np.zeros(z.shape[0]), np.ones(z.shape[0]), np.zeros(z.shape[0]), np.zeros(z.shape[0], int))
             continue
-        top = t[:, 0].max()
-        step = 0.5 * df / (top * fr)
-        rhos = np.arange(rho[0], rho[1] + step / 2, step) if rho[1] > rho[0] else np.array([rho[0]])
-        n_cells = int(np.ceil((rho[1] - rho[0]) * top * fr / df)) + 1
-        f = (t[None, :, 0] * rhos[:, None] + t[None, :, 1]) * fr  # (n_rho, J)
-        idx = np.rint(f / df).astype(int)
-        active = (idx >= 1) & (idx < nb)
-        if mask_shaft:
-            order = np.rint(f / fr)
-            active &= ~((order >= 1) & (np.abs(f - order * fr) < 1.5 * df))
-        for g in np.atleast_1d(np.asarray(exclude, float)):
-            active &= np.abs(f - g) >= 1.5 * df
-        values = np.where(active[None], z[:, np.clip(idx, 0, nb - 1)], 0.0)  # (m, n_rho, J)
-        s = values.sum(axis=2)
-        j = active.sum(axis=1)
-        rows = np.arange(m)
-        if k == 1:
-            lp = comb_log10p(s, j[None, :])
-            best = np.argmin(lp, axis=1)
-            lp_best = lp[rows, best]
-        else:
-            nodes, med = averaged_median(k)
-            proxy = log10_gamma_sf(j[None, :] * k, k * s * nodes[nodes.size // 2] / med)
-            best = np.argmin(np.where(j[None, :] > 0, proxy, 0.0), axis=1)
-            lp_best = averaged_comb_log10p(s[rows, best], j[best], k)
-        out[h] = (np.minimum(0.0, lp_best + np.log10(n_cells * n_bands)), rhos[best], s[rows, best], j[best])
+        rhos, n_cells = _scales(t, rho, df, fr)
+        s, j = _comb_sums(z, df, fr, t, rhos, mask_shaft, exclude)
+        best = _best_scale(s, j, k)[:, 0]
+        s_best = s[np.arange(z.shape[0]), best]
+        out[h] = (np.minimum(0.0, _log10p(s_best, j[best], k) + np.log10(n_cells * n_bands)), rhos[best], s_best,
+                  j[best])
     return out
 
+
+def recent_run_evidence(z: np.ndarray, df: float, geometry, hypothesis: FaultState, mask_shaft: bool = True
+                        ) -> np.ndarray:
+    """log10 p of ``hypothesis``' comb (at ``geometry``, :class:`.accumulation.CombGeometry`) in each row
+    r of ``z``: the normalised mean SES of the last r + 1 windows (no band-choice factor)."""
+    t = geometry.terms[hypothesis]
+    rhos, n_cells = _scales(t, geometry.rho, df, geometry.fr)
+    s, j = _comb_sums(z, df, geometry.fr, t, rhos, mask_shaft, ())
+    out = np.empty(z.shape[0])
+    for r in range(z.shape[0]):
+        best = _best_scale(s[r:r + 1], j, r + 1)[0, 0]
+        out[r] = min(0.0, _log10p(s[r:r + 1, best], j[best:best + 1], r + 1)[0] + np.log10(n_cells))
+    return out
+
+
+def _scales(t: np.ndarray, rho: tuple[float, float], df: float, fr: float) -> tuple[np.ndarray, int]:
+    """The scales ρ searched for comb ``t`` (half a bin apart at its highest term) and the distinct
+    bins that term visits (the search's Bonferroni count)."""
+    top = t[:, 0].max()
+    step = 0.5 * df / (top * fr)
+    rhos = np.arange(rho[0], rho[1] + step / 2, step) if rho[1] > rho[0] else np.array([rho[0]])
+    return rhos, int(np.ceil((rho[1] - rho[0]) * top * fr / df)) + 1
+
+
+def _comb_sums(z: np.ndarray, df: float, fr: float, t: np.ndarray, rhos: np.ndarray, mask_shaft: bool,
+               exclude) -> tuple[np.ndarray, np.ndarray]:
+    """S (rows of ``z``, scales) and J (scales) of comb ``t`` at every scale of ``rhos``."""
+    nb = z.shape[1]
+    f = (t[None, :, 0] * rhos[:, None] + t[None, :, 1]) * fr  # (n_rho, J)
+    idx = np.rint(f / df).astype(int)
+    active = (idx >= 1) & (idx < nb)
+    if mask_shaft:
+        order = np.rint(f / fr)
+        active &= ~((order >= 1) & (np.abs(f - order * fr) < 1.5 * df))
+    for g in np.atleast_1d(np.asarray(exclude, float)):
+        active &= np.abs(f - g) >= 1.5 * df
+    values = np.where(active[None], z[:, np.clip(idx, 0, nb - 1)], 0.0)  # (m, n_rho, J)
+    return values.sum(axis=2), active.sum(axis=1)
+
+
+def _best_scale(s: np.ndarray, j: np.ndarray, k: int, starts=(0,)) -> np.ndarray:
+    """Index of the best scale per row of S (rows, scales) with J (scales), in each run of scales
+    beginning at ``starts`` ((rows, runs); the first of equals): by the tabulated p-value for
+    single windows, for k averaged ones by the p-value at the normalising median's median."""
+    if k == 1:
+        score = comb_log10p(s, j[None, :])
+    else:
+        nodes, med = averaged_median(k)
+        score = np.where(j[None, :] > 0, log10_gamma_sf(j[None, :] * k, k * s * nodes[nodes.size // 2] / med), 0.0)
+    starts = np.asarray(starts, int)
+    low = np.minimum.reduceat(score, starts, axis=1)
+    sizes = np.diff(np.r_[starts, score.shape[1]])
+    at_low = score == np.repeat(low, sizes, axis=1)
+    return np.minimum.reduceat(np.where(at_low, np.arange(score.shape[1]), score.shape[1]), starts, axis=1)
+
+
+def _log10p(s: np.ndarray, j: np.ndarray, k: int) -> np.ndarray:
+    """log10 p of comb sums S with J terms over spectra averaged from k windows, elementwise."""
+    return comb_log10p(s, j) if k == 1 else averaged_comb_log10p(s, j, k)
 
 #: log10 of the level at which a ball comb's cage sidebands, tested alone at the comb's best scale,
 #: must show evidence of their own: a ball defect travels with the cage through the load zone
@@ -175,20 +213,16 @@ def decoy_ranges(terms: np.ndarray, rho: tuple[float, float], df: float, fr: flo
     ``rho`` (an IR comb's carrier shifted by a fifth lands on its own shaft sideband)."""
     width = max(rho[1] - rho[0], 0.01)
     centre = 0.5 * (rho[0] + rho[1])
-    own = [(min((c * r + d) * fr for r in rho), max((c * r + d) * fr for r in rho)) for c, d, _ in terms]
-    out = []
-    for m in range(2, 13):
-        for side in (-1.0, 1.0):
-            lo = centre + side * m * width - 0.5 * width
-            if lo <= 0.2:
-                continue
-            span = [((c * lo + d) * fr, (c * (lo + width) + d) * fr) for c, d, _ in terms]
-            if all(b1 + 1.5 * df < a2 or b2 + 1.5 * df < a1 for a1, b1 in span for a2, b2 in own):
-                out.append((lo, lo + width))
-            if len(out) == N_DECOYS:
-                return out
-    return out
-
+    c, d = terms[:, 0], terms[:, 1]
+    own = np.sort(np.stack([(c * r + d) * fr for r in rho], axis=-1), axis=-1)  # (J, 2) Hz
+    m = np.repeat(np.arange(2, 13), 2)
+    lo = centre + np.tile([-1.0, 1.0], 11) * m * width - 0.5 * width  # nearest first, alternating sides
+    lo = lo[lo > 0.2]
+    span = np.stack([(c * lo[:, None] + d) * fr, (c * (lo[:, None] + width) + d) * fr], axis=-1)  # (n, J, 2)
+    a1, b1 = span[:, :, None, 0], span[:, :, None, 1]
+    a2, b2 = own[None, None, :, 0], own[None, None, :, 1]
+    clear = ((b1 + 1.5 * df < a2) | (b2 + 1.5 * df < a1)).all(axis=(1, 2))
+    return [(float(x), float(x + width)) for x in lo[clear][:N_DECOYS]]
 
 def stands_out(z: np.ndarray, df: float, fr: float, terms: np.ndarray, rho: tuple[float, float], log10p: float,
                mask_shaft: bool = True, k: int = 1) -> bool:
@@ -202,11 +236,14 @@ def stands_out(z: np.ndarray, df: float, fr: float, terms: np.ndarray, rho: tupl
     in nine under any exchangeable null). Decoys that land on another hypothesis' lines only
     make the test stricter: evidence another hypothesis explains does not decide.
     """
-    for lo, hi in decoy_ranges(terms, rho, df, fr):
-        lp = comb_evidence(z, df, fr, {FaultState.NORMAL: terms}, (lo, hi), mask_shaft, 1, k)[FaultState.NORMAL][0]
-        if lp[0] <= log10p:
-            return False
-    return True
+    decoys = [_scales(terms, r, df, fr) for r in decoy_ranges(terms, rho, df, fr)]
+    if not decoys:
+        return True
+    s, j = _comb_sums(np.atleast_2d(z), df, fr, terms, np.concatenate([r for r, _ in decoys]), mask_shaft, ())
+    best = _best_scale(s, j, k, np.cumsum([0] + [r.size for r, _ in decoys[:-1]]))[0]
+    lp = _log10p(s[0, best], j[best], k)
+    lp = np.minimum(0.0, lp + np.log10([n for _, n in decoys]))
+    return bool(np.all(lp > log10p))
 
 
 def term_frequencies(terms: dict, hypothesis: FaultState, rho: float, fr: float) -> np.ndarray:

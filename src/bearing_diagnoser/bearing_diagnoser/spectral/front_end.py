@@ -77,6 +77,12 @@ class SpectralScores(WindowScores):
                     *(f"{h.label}_posterior" for h in (*HYPOTHESES, FaultState.NORMAL)),
                     "band_low_hz", "band_high_hz", "speed_hz", "speed_sigma_hz", *THESIS_SUMMARY_KEYS)
 
+    def speed_warning(self) -> str:
+        if not self.speed_disagrees:
+            return ""
+        return (f"measured shaft speed {60 * self.speed_hz:.1f} rpm disagrees with the told "
+                f"{60 * self.told_speed_hz:.1f} rpm beyond its tolerance; the measured speed is used")
+
     def as_dict(self) -> dict[str, float]:
         out: dict[str, float] = {}
         for h, v in self.significance.items():
@@ -99,8 +105,8 @@ class SpectralFrontEnd:
     Parameters
     ----------
     config : DiagnoserConfig
-        Its ``front_end`` (SpectralSettings), ``pfa`` (false-alarm probability per window, all
-        hypotheses together) and ``usable_bandwidth`` (Hz; 0: up to 0.45·fs).
+        Its ``front_end`` (SpectralSettings, with the false-alarm budget per hour) and
+        ``usable_bandwidth`` (Hz; 0: up to 0.45·fs); ``pfa`` is the fold front end's.
     sample_rate : float
         Hz.
     bearing : Bearing

@@ -80,6 +80,12 @@ class SpectralSettings:
     def describe_window(self) -> str:
         return f"window {self.window_s:g} s" if self.window_s else "window 4 cage periods of the bearing"
 
+    def with_false_alarm_rate(self, per_hour: float) -> SpectralSettings:
+        return replace(self, false_alarm_rate=float(per_hour)) if per_hour else self
+
+    def describe_false_alarms(self, pfa: float) -> str:
+        return f"false alarms at most {self.false_alarm_rate:g} per hour of healthy operation"
+
     def textbook(self) -> SpectralSettings:
         """:data:`BASELINE` with this decision's speed handling (tolerance, blind range)."""
         return replace(BASELINE, told_tolerance=self.told_tolerance, blind_range_hz=self.blind_range_hz)

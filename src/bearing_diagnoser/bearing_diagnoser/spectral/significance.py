@@ -31,7 +31,7 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import betaincinv, gammaincc, gammaincinv, gammaln, logsumexp
+from scipy.special import betaincinv, gammaincc, gammaincinv, gammaln
 
 from .envelope_spectrum import N_MED
 
@@ -128,8 +128,21 @@ def averaged_comb_log10p(s, j, k: int) -> np.ndarray:
     s, j = np.broadcast_arrays(np.asarray(s, float), np.asarray(j, float))
     nodes, med = averaged_median(int(k))
     lq = log10_gamma_sf((j * k)[..., None], (k * np.maximum(s, 0.0) / med)[..., None] * nodes)
-    out = (logsumexp(lq * np.log(10.0), axis=-1) - np.log(nodes.size)) / np.log(10.0)
+    out = (_logsumexp(lq * np.log(10.0)) - np.log(nodes.size)) / np.log(10.0)
     return np.where(j > 0, np.minimum(out, 0.0), 0.0)
+
+
+def _logsumexp(a: np.ndarray) -> np.ndarray:
+    """ln Σ exp(a) over the last axis of ``a``: scipy.special.logsumexp's arithmetic (the
+    maxima taken out of the sum, log1p of the rest), without its per-call overhead (a third of a
+    long-horizon window's cost). A row holding NaN (a comb of no terms) gives NaN, silently."""
+    a_max = a.max(axis=-1, keepdims=True)
+    is_max = a == a_max
+    m = is_max.sum(axis=-1, keepdims=True).astype(float)
+    s = np.exp(np.where(is_max, -np.inf, a) - a_max).sum(axis=-1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(s == 0, s, s / m)
+        return (np.log1p(s) + np.log(m) + a_max)[..., 0]
 
 
 def log10_bayes_factor_bound(log10p) -> np.ndarray:

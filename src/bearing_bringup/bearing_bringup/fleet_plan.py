@@ -21,6 +21,12 @@ motor's ``shaft_speed`` for all its nodes (a drive's topic); ``sensor`` is ``sim
 play`` publishes ``<motor>/vibration/drive_end``); a node name holds parameters of that
 node alone. Every value is checked against the node's declared parameters when loaded.
 
+``chunk_duration`` (s) is the sensor's chunk: the simulator's parameter for a simulated
+motor (default the simulator's, 0.01 s, the thesis' cases), what the driver publishes for
+an external one (default :data:`EXTERNAL_CHUNK_S`). Residuals and decisions then arrive
+in bursts one chunk apart, so the diagnoser's and the fleet node's ``stale_timeout`` are
+at least :data:`STALE_CHUNKS` chunks.
+
 Processes (each restarted on its own by the restart policy): a simulator per simulated
 motor and the ``fleet`` node always run alone; the monitoring nodes run as
 
@@ -36,9 +42,10 @@ Every node finds its parameters in one generated file keyed by its fully qualifi
 from __future__ import annotations
 
 import importlib
+import math
 import pathlib
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import yaml
 
@@ -51,6 +58,7 @@ SENSORS = ("simulator", "external")
 SPECS = {spec.name: spec for spec in GRAPH + (FLEET_NODE,)}
 NODE_NAMES = tuple(spec.name for spec in GRAPH)
 SIMULATOR = "simulator"
+DIAGNOSER = "diagnoser"
 MONITORS = tuple(spec.name for spec in GRAPH if spec.node_class)  # or_observer, ir_observer, diagnoser
 
 #: Motor settings -> the nodes whose parameter of that name they set.
@@ -58,13 +66,18 @@ SETTINGS = {
     "bearing": MONITORS,
     "rpm": (SIMULATOR, *MONITORS),
     **{name: (SIMULATOR,) for name in ("sample_rate", "scenario", "schedule", "segment_duration", "noise_density",
-                                       "seed")},
+                                       "seed", "chunk_duration")},
 }
 FILE_KEYS = ("layout", "motors_per_process", "parameters", "defaults", "motors", "fleet")
 NAMESPACE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
 ROLE_PROCESS = {"observer": "observers", "diagnoser": "diagnosers"}  # role layout: executable -> process name
 #: Role layout: at 48 kHz an observers process of 12 motors takes about 0.7 core (README "Fleet").
 MOTORS_PER_PROCESS = 12
+#: Chunk (s) an external sensor publishes unless the fleet file says otherwise: a tenth of the
+#: messages of 0.01 s chunks for at most 0.1 s more latency (README "Fleet").
+EXTERNAL_CHUNK_S = 0.1
+#: Staleness timeouts are at least this many chunks (data arrives one chunk at a time).
+STALE_CHUNKS = 3
 
 
 class FleetError(ValueError):
@@ -74,12 +87,14 @@ class FleetError(ValueError):
 @dataclass(frozen=True)
 class Motor:
     """One monitored motor: its namespace (no leading slash), whether a simulator stands in
-    for its sensor, its nodes' parameters (node name -> {parameter: value}), its speed topic."""
+    for its sensor, its nodes' parameters (node name -> {parameter: value}), its speed topic,
+    its sensor's chunk (s)."""
 
     name: str
     simulated: bool
     parameters: dict
     speed_topic: str = ""
+    chunk_duration: float = EXTERNAL_CHUNK_S
 
     def nodes(self) -> tuple:
         """Its node names, the simulator first when it has one."""
@@ -128,7 +143,21 @@ def load_fleet(path, motors: int | None = None, base_parameters=None) -> Fleet:
     built = tuple(_motor(name, {**defaults, **(listed.get(name) or {})}, base, path) for name in names)
     fleet_parameters = _checked(FLEET_NODE.name, {**_section(base, FLEET_NODE.name), **(doc.get("fleet") or {})},
                                 f"{path}: fleet")
+    _stale_floor(fleet_parameters, FLEET_NODE.name, max(m.chunk_duration for m in built))
     return Fleet(built, layout, per_process, fleet_parameters)
+
+
+def _default(node: str, parameter: str):
+    """The declared default of a node's parameter."""
+    return next(p.default for p in importlib.import_module(SPECS[node].parameters_module).PARAMETERS
+                if p.name == parameter)
+
+
+def _stale_floor(params: dict, node: str, chunk_s: float) -> None:
+    """Raise ``params``' stale_timeout (or the node's default) to :data:`STALE_CHUNKS` chunks."""
+    floor = STALE_CHUNKS * chunk_s
+    if params.get("stale_timeout", _default(node, "stale_timeout")) < floor:
+        params["stale_timeout"] = floor
 
 
 def _read_yaml(path: pathlib.Path) -> dict:
@@ -159,7 +188,10 @@ def _motor(name: str, settings: dict, base: dict, path) -> Motor:
     if unknown:
         raise FleetError(f"{where}: unknown settings {', '.join(sorted(unknown))}; expected sensor, speed_topic, "
                          f"{', '.join(SETTINGS)} or a node name ({', '.join(NODE_NAMES)})")
-    motor = Motor(name, sensor == "simulator", {}, speed_topic)
+    simulated = sensor == "simulator"
+    if not simulated:  # no node of the motor's takes its chunk
+        chunk = _external_chunk(settings.pop("chunk_duration", EXTERNAL_CHUNK_S), where)
+    motor = Motor(name, simulated, {}, speed_topic)
     for node in motor.nodes():
         own = settings.get(node) or {}
         if not isinstance(own, dict):
@@ -168,7 +200,18 @@ def _motor(name: str, settings: dict, base: dict, path) -> Motor:
         params.update({key: value for key, value in settings.items() if node in SETTINGS.get(key, ())})
         params.update(own)
         motor.parameters[node] = _checked(node, params, f"{where}.{node}")
-    return motor
+    if simulated:
+        chunk = motor.parameters[SIMULATOR].get("chunk_duration", _default(SIMULATOR, "chunk_duration"))
+    _stale_floor(motor.parameters[DIAGNOSER], DIAGNOSER, chunk)
+    return replace(motor, chunk_duration=chunk)
+
+
+def _external_chunk(value, where: str) -> float:
+    """An external sensor's chunk_duration (s), checked."""
+    chunk = float(value) if type(value) in (int, float) else value
+    if not (isinstance(chunk, float) and math.isfinite(chunk) and chunk > 0):
+        raise FleetError(f"{where}.chunk_duration: expected a positive number of seconds, got {value!r}")
+    return chunk
 
 
 def _checked(node: str, params: dict, where: str) -> dict:
