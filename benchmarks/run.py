@@ -28,6 +28,7 @@ MODULES = (
     "benchmarks.sim_benchmarks",
     "benchmarks.obs_benchmarks",
     "benchmarks.diag_benchmarks",
+    "benchmarks.batch_benchmarks",
     "benchmarks.bag_benchmarks",
     "benchmarks.graph_benchmarks",
     "benchmarks.fleet_benchmarks",

@@ -15,6 +15,9 @@ from .bearings import CATALOG, Bearing
 #: The model set without a model: the observers pass the measurement through.
 NONE = "none"
 
+#: The faults a model set holds a model of (one model file each, named after the fault).
+FAULT_TYPES = ("outer_race", "inner_race")
+
 
 @dataclass(frozen=True)
 class ModelSetInfo:

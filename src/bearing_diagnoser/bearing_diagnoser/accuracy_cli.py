@@ -7,10 +7,6 @@ import argparse
 import sys
 from pathlib import Path
 
-from bearing_recordings.recording import InputError
-
-from .accuracy import load_manifest, markdown, run, summary_line
-
 
 def main(argv=None) -> int:
     """Run the CLI; returns the exit status (2 on a bad manifest)."""
@@ -20,6 +16,10 @@ def main(argv=None) -> int:
     p.add_argument("--methods", nargs="+", default=["model", "envelope"], choices=("model", "envelope"))
     p.add_argument("--out", help="write the Markdown report here (default: stdout)")
     args = p.parse_args(argv)
+    from bearing_recordings.recording import InputError
+
+    from .accuracy import load_manifest, markdown, run, summary_line  # the diagnosis: not for --help
+
     try:
         records = load_manifest(args.manifest)
     except InputError as exc:

@@ -1,29 +1,43 @@
-"""``bearing-diagnose``: offline diagnosis of a recording, one JSON object per state segment.
+"""``bearing-diagnose``: offline diagnosis of recordings, one JSON object per state segment.
 
-    bearing-diagnose FILE [--rpm RPM] [--sample-rate HZ] [--channel NAME] [--bearing NAME|FILE.yaml]
-                     [--units g|m/s2] [--model-set NAME] [--method model|envelope] [--plot DIR]
+    bearing-diagnose PATH... [--jobs N] [--progress | --no-progress] [--rpm RPM] [--sample-rate HZ]
+                     [--channel NAME] [--bearing NAME|FILE.yaml] [--units g|m/s2] [--model-set NAME]
+                     [--method model|envelope] [--plot DIR]
 
-FILE is a ``bearing-sim`` .npz, a MATLAB recording (CWRU, MFPT, or one signal such as
-HIT-SM; see ``bearing_recordings.mat_files``) or a rosbag2 directory. Stdout: one JSON object
-per line (``shared/CONTRACT.md``); stderr: the model set, bearing, any resampling, the
-speed, sensor problems, and on bad input one ``error:`` line with exit status 2.
+PATH is a ``bearing-sim`` .npz, a MATLAB recording (CWRU, MFPT, or one signal such as
+HIT-SM; see ``bearing_recordings.mat_files``), a rosbag2 directory, or a folder of any of
+these (walked: ``bearing_recordings.recording_files``). Stdout: one JSON object per line
+(``shared/CONTRACT.md``); with several paths or a folder, each also carries ``"file"``, in
+the order of the files whatever ``--jobs`` runs in parallel. Stderr: the model set, bearing,
+any resampling, the speed, sensor problems (each file's prefixed with it in a batch), and per
+file that cannot be diagnosed one ``error:`` line. The options apply to every file as
+they would to it alone, so a file's lines in a batch are those of its own run. Exit status 0, or 2 when any file was bad
+input, 1 when any failed otherwise.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import logging
+import os
 import sys
+from pathlib import Path
 
 EXIT_BAD_INPUT = 2
+
+PROG = "bearing-diagnose"
 
 
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``bearing-diagnose``."""
-    p = argparse.ArgumentParser(prog="bearing-diagnose",
-                                description="Diagnose a bearing vibration recording offline.")
-    p.add_argument("file", help="bearing-sim .npz, MATLAB .mat (CWRU, MFPT, one signal) or rosbag2 directory")
+    p = argparse.ArgumentParser(prog=PROG, description="Diagnose bearing vibration recordings offline.")
+    p.add_argument("paths", nargs="+", metavar="PATH",
+                   help="bearing-sim .npz, MATLAB .mat (CWRU, MFPT, one signal), rosbag2 directory, or a folder "
+                        "of these (walked)")
+    p.add_argument("--jobs", "-j", type=_jobs, default=1, metavar="N",
+                   help="diagnose N files at a time in worker processes (default 1; 0: one per available core)")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="a progress line on stderr (default: for several files when stderr is a terminal)")
     p.add_argument("--rpm", type=float, help="shaft speed (rev/min); default from the file, else estimated")
     p.add_argument("--rpm-tolerance", type=float, metavar="FRACTION",
                    help="relative accuracy of --rpm (default 0.10, a nameplate's; the speed is measured from the "
@@ -37,63 +51,134 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--model-set", help="sim_48k, sim_12k, cwru_de_6205 or none (default: from the input)")
     p.add_argument("--method", choices=("model", "envelope"), default="model",
                    help="model: observers + envelope-spectrum decision (default); envelope: textbook reference")
-    p.add_argument("--plot", metavar="DIR", help="write figures to DIR")
+    p.add_argument("--plot", metavar="DIR", help="write figures to DIR (with several files: DIR/<file name>/)")
     return p
 
 
-class _OneLine(logging.Formatter):
-    def format(self, record):
-        return f"bearing-diagnose: {record.getMessage()}"
+def _jobs(text: str) -> int:
+    """``--jobs``: a count of worker processes, 0 for one per core this process may run on."""
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 (one per core) or more, got {n}")
+    if n == 0:
+        return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return n
+
+
+def _options(args):
+    """The run's :class:`.batch_diagnosis.FileOptions`, checked once for every file (InputError,
+    BearingError)."""
+    from bearing_common.bearings import load_bearing
+    from bearing_recordings.recording import InputError, check_rate, check_rpm
+
+    from .batch_diagnosis import FileOptions
+
+    if args.rpm_tolerance is not None and not 0.0 < args.rpm_tolerance < 0.5:
+        raise InputError(f"--rpm-tolerance must be in (0, 0.5), got {args.rpm_tolerance:g}")
+    return FileOptions(sample_rate=None if args.sample_rate is None else check_rate(args.sample_rate),
+                       rpm=None if args.rpm is None else check_rpm(args.rpm), rpm_tolerance=args.rpm_tolerance,
+                       channel=args.channel, units=args.units,
+                       bearing=load_bearing(args.bearing) if args.bearing else None, model_set=args.model_set,
+                       method=args.method)
+
+
+def _plot_dirs(root: str | None, paths: list[str], batch: bool) -> list | None:
+    """Each file's figure directory: ``root`` itself for one file, else ``root``/<file name>
+    (numbered from -2 on where two files share a name)."""
+    if root is None:
+        return None
+    if not batch:
+        return [root]
+    out, used = [], set()
+    for path in paths:
+        stem = Path(path).stem or Path(path).name
+        name, k = stem, 1
+        while name in used:
+            k += 1
+            name = f"{stem}-{k}"
+        used.add(name)
+        out.append(str(Path(root) / name))
+    return out
+
+
+class _Console:
+    """Stdout and stderr of a run, kept clear of the progress line (if any)."""
+
+    def __init__(self, bar):
+        self.bar = bar
+
+    def write(self, text: str, stream) -> None:
+        if self.bar is not None:
+            self.bar.clear()
+        print(text, file=stream, flush=True)
+        if self.bar is not None:
+            self.bar.draw()
+
+    def note(self, text: str) -> None:
+        self.write(f"{PROG}: {text}", sys.stderr)
+
+
+def _untagged(message: str, path: str) -> str:
+    """``message`` without a leading ``path:`` (the loaders name the file; a batch's line names it first)."""
+    return message[len(path) + 2:] if message.startswith(f"{path}: ") else message
 
 
 def main(argv=None) -> int:
     """Run the CLI; returns the exit status (0 on success)."""
-    from bearing_common.bearings import BearingError, load_bearing
-    from bearing_recordings.load import load_recording
-    from bearing_recordings.recording import InputError
-
-    from .recording_diagnosis import diagnose_recording
-
     args = build_parser().parse_args(argv)
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(_OneLine())
-    log = logging.getLogger("bearing_diagnoser")
-    log.addHandler(handler)
-    log.setLevel(logging.INFO)
-    logging.getLogger("bearing_recordings").addHandler(handler)
+    if args.jobs != 1:  # one BLAS thread per worker (read when numpy is first imported)
+        for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+            os.environ.setdefault(var, "1")
+    from bearing_common.bearings import BearingError
+    from bearing_common.progress_bar import ProgressBar
+    from bearing_recordings.recording import InputError
+    from bearing_recordings.recording_files import expand, is_folder
+
+    from .batch_diagnosis import run_batch
+
+    batch = len(args.paths) > 1 or any(is_folder(p) for p in args.paths)
     try:
-        rec = load_recording(args.file, sample_rate=args.sample_rate, rpm=args.rpm, channel=args.channel,
-                             units=args.units)
-        for note in rec.notes or ():
-            log.info(note)
-        bearing = load_bearing(args.bearing) if args.bearing else rec.bearing
-        if args.rpm_tolerance is not None and not 0.0 < args.rpm_tolerance < 0.5:
-            raise InputError(f"--rpm-tolerance must be in (0, 0.5), got {args.rpm_tolerance:g}")
-        res = diagnose_recording(rec, model_set=args.model_set, method=args.method, rpm=args.rpm, bearing=bearing,
-                                 keep_streams=bool(args.plot), rpm_tolerance=args.rpm_tolerance)
+        options = _options(args)
     except (InputError, BearingError) as exc:
-        print(f"bearing-diagnose: error: {exc}", file=sys.stderr)
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    paths, empty = expand(args.paths)
+    show = args.progress if args.progress is not None else batch and sys.stderr.isatty()
+    bar = ProgressBar(len(paths), sys.stderr, PROG, live=sys.stderr.isatty()) if show and paths else None
+    out = _Console(bar)
+    status = EXIT_BAD_INPUT if empty else 0
+    for folder in empty:
+        out.note(f"error: {folder}: not a rosbag2 recording (no metadata.yaml), and no recordings "
+                 "(.mat, .npz, rosbag2 directories) in it")
+    tag = (lambda path: f"{path}: ") if batch else (lambda path: "")
+    signal_s = cpu_s = 0.0
+    failed = 0
+    try:
+        for report in run_batch(paths, options, args.jobs, _plot_dirs(args.plot, paths, batch),
+                                on_done=bar and (lambda r: bar.advance(r.signal_s, bool(r.error))),
+                                emit=lambda path, note: out.note(tag(path) + note)):
+            for line in report.lines:
+                out.write(json.dumps({"file": report.path} | line if batch else line), sys.stdout)
+            if report.error:
+                out.note(f"error: {tag(report.path)}{_untagged(report.error, report.path) if batch else report.error}")
+            status = max(status, report.status)
+            failed += bool(report.error)
+            signal_s += report.signal_s
+            cpu_s += report.cpu_s
+    except KeyboardInterrupt:
+        out.note("interrupted")
+        return 130
     finally:
-        log.removeHandler(handler)
-        logging.getLogger("bearing_recordings").removeHandler(handler)
-    for start, end, problem in res.not_diagnosed[:1]:
-        print(f"bearing-diagnose: warning: {len(res.not_diagnosed)} windows not diagnosed, "
-              f"first at {start:.3f}-{end:.3f} s: {problem}", file=sys.stderr)
-    for seg in res.segments:
-        print(json.dumps(seg.to_json()), flush=True)
-    if args.plot:
-        try:
-            from .plots import write_figures
-            paths = write_figures(res, args.plot)
-            print(f"bearing-diagnose: wrote {len(paths)} figures to {args.plot}", file=sys.stderr)
-        except ImportError as exc:
-            print(f"bearing-diagnose: error: --plot needs matplotlib ({exc})", file=sys.stderr)
-            return 1
-        except OSError as exc:
-            print(f"bearing-diagnose: error: cannot write figures to {args.plot}: {exc}", file=sys.stderr)
-            return 1
-    return 0
+        if bar is not None:
+            bar.clear()
+    if batch and paths:
+        speed = f", {signal_s / cpu_s:.0f} x real time per core" if cpu_s > 0 else ""
+        out.note(f"{len(paths)} files: {len(paths) - failed} diagnosed, {failed} failed "
+                 f"({signal_s:.1f} s of signal{speed})")
+    return status
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -43,12 +43,12 @@ import numpy as np
 from scipy import signal
 
 from bearing_common.bearings import Bearing, bearing_from_dict
+from bearing_common.model_set_info import FAULT_TYPES
 
 from .piecewise_linear import MonotonePiecewiseLinear
 
 FORMAT_VERSION = 1
 KIND = "bearing_observer.hw_model"
-FAULT_TYPES = ("outer_race", "inner_race")
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 
 class ModelFileError(ValueError):

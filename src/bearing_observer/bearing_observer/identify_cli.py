@@ -34,14 +34,11 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from bearing_common.bearings import DEFAULT_BEARING, Bearing, BearingError, load_bearing
-from bearing_recordings.load import load_recording
+from bearing_common.model_set_info import FAULT_TYPES, NONE
 
-from .fault_identification import DEFAULT_ORDERS, N_AVERAGE_IR, identify_fault_model
-from .hw_model import FAULT_TYPES, same_bearing
-from .model_sets import MODELS_DIR, NONE
+# the identification and the model files (numpy, scipy, numba) are imported where they are used:
+# not for --help or a rejected argument
 
 ORDER_GRID = [(n, n, k) for n in (4, 6, 8, 10, 12) for k in (0, 1)]
 
@@ -75,9 +72,13 @@ def _parse_sources(sources, fault):
 
 def _simulated(fault: str, args, bearing: Bearing | None):
     """(accel m/s², rate Hz, rpm, bearing, provenance) of a noise-free simulation of ``fault``."""
+    import numpy as np
+
     from bearing_common.states import parse_fault
     from bearing_sim.model_parameters import DRIVE_END
     from bearing_sim.simulator import SimulationConfig, simulate
+
+    from .hw_model import same_bearing
 
     if args.sample_rate is None:
         raise ValueError("--source sim needs --sample-rate")
@@ -93,6 +94,8 @@ def _simulated(fault: str, args, bearing: Bearing | None):
 
 def _recorded(src: str, args, bearing: Bearing | None):
     """(accel m/s², rate Hz, rpm, bearing, provenance) of the recording ``src``."""
+    from bearing_recordings.load import load_recording
+
     rec = load_recording(src, sample_rate=args.sample_rate, rpm=args.rpm, channel=args.channel, units=args.units)
     for note in rec.notes or ():
         print(f"bearing-identify: {src}: {note}", file=sys.stderr)
@@ -123,19 +126,22 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--orders", type=int, nargs=3, metavar=("NB", "NF", "NK"))
     g.add_argument("--order-search", action="store_true")
     p.add_argument("--mode", choices=("thesis", "series"), default="thesis")
-    p.add_argument("--n-average", type=int, default=N_AVERAGE_IR)
+    p.add_argument("--n-average", type=int, default=None,
+                   help="inner-race periods averaged (default: the identification's, N_AVERAGE_IR)")
     p.add_argument("--duration", type=float, default=1.0, help="simulated seconds per fault")
     p.add_argument("--max-seconds", type=float, default=None,
                    help="use at most this many seconds of a recording")
     p.add_argument("--channel", default=None)
     p.add_argument("--units", choices=("g", "m/s2"), default=None, help="units of a one-signal .mat file (default g)")
     p.add_argument("--model-set", required=True, help="name of the set (a directory under --out)")
-    p.add_argument("--out", default=str(MODELS_DIR), help="directory holding model sets")
+    p.add_argument("--out", default=None, help="directory holding model sets (default: the package's models/)")
     return p
 
 
 def _identify(y, fault, base, args, prov):
     """The identification result, with the order search when asked for."""
+    from .fault_identification import DEFAULT_ORDERS, identify_fault_model
+
     if not args.order_search:
         orders = tuple(args.orders) if args.orders else DEFAULT_ORDERS[fault]
         return identify_fault_model(y, fault=fault, orders=orders, provenance=dict(prov), **base)
@@ -164,7 +170,10 @@ def main(argv=None) -> int:
         print(f"bearing-identify: error: {exc}", file=sys.stderr)
         return 2
     command = "bearing-identify " + " ".join(shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:]))
-    out_dir = Path(args.out) / args.model_set
+    from .fault_identification import N_AVERAGE_IR
+    from .model_sets import MODELS_DIR
+
+    out_dir = Path(args.out or MODELS_DIR) / args.model_set
     set_rate = None
     for fault, src in pairs:
         t0 = time.perf_counter()
@@ -177,7 +186,8 @@ def main(argv=None) -> int:
             set_rate = fs
             prov["command"] = command
             base = dict(sample_rate=fs, rpm=rpm, bearing=used_bearing, mode=args.mode,
-                        n_average=args.n_average, refine_frequency=(src != "sim"))
+                        n_average=N_AVERAGE_IR if args.n_average is None else args.n_average,
+                        refine_frequency=(src != "sim"))
             result = _identify(y, fault, base, args, prov)
         except (ValueError, OSError) as exc:  # InputError and BearingError are ValueErrors
             print(f"bearing-identify: error ({fault}, {src}): {exc}", file=sys.stderr)

@@ -2,13 +2,12 @@
 
 from bearing_common.bearings import DEFAULT_BEARING
 from bearing_common.chunk_stream import INPUT_MODE_HELP, INPUT_MODES
+from bearing_common.model_set_info import FAULT_TYPES
 from bearing_common.parameters import ParameterSpec, bearing_check, one_of, positive
 from bearing_common.states import FaultState, parse_fault
 
 from .hw_model import ModelFileError
 from .model_sets import model_set
-
-FAULT_TYPES = ("outer_race", "inner_race")
 
 
 def model_set_check(value: str) -> str | None:

@@ -21,7 +21,6 @@ from bearing_common.topics import Topic
 
 from .bag_types import CUSTOM_BEARING, CUSTOM_NAMESPACE, BagError, project_typestore
 from .recording import Recording, check_rpm
-from .resampling import resample
 
 STORAGES = ("mcap", "sqlite3")
 
@@ -150,6 +149,8 @@ def recording_to_bag(rec: Recording, out, chunk_duration: float = DEFAULT_CHUNK_
     if resample_to is not None:
         if not (np.isfinite(resample_to) and resample_to > 0):
             raise BagError(f"resample rate must be positive, got {resample_to:g} Hz")
+        from .resampling import resample  # scipy.signal: only when resampling (not for bearing-bag --help)
+
         x, fs = resample(x, fs, resample_to), float(resample_to)
     if max_duration is not None:
         if not (np.isfinite(max_duration) and max_duration > 0):

@@ -49,6 +49,10 @@ G_IN_PER_S2 = 386.4  #: listing's g (in/s^2); mass [lbf s^2/in] = lbm / 386.4
 
 VARIANTS = ("default", "listing", "lagrangian_housing")
 
+#: Broadband level of the real CWRU normal record 97 (about 0.07 g RMS over
+#: 0-24 kHz), (m/s^2)/sqrt(Hz): the documented value to use when noise is wanted.
+DEFAULT_NOISE_DENSITY = 4.5e-3
+
 # --------------------------------------------------------------------------
 # The listing's magic numbers, named (modelpar.m, appendix A)
 # --------------------------------------------------------------------------

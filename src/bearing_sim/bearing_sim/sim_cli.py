@@ -14,11 +14,8 @@ import os
 import sys
 import time
 
-import numpy as np
-
-from .model_parameters import VARIANTS
+from .model_parameters import DEFAULT_NOISE_DENSITY, VARIANTS
 from .schedule import DEFAULT_SEGMENT_DURATION, SCENARIOS, parse_schedule, scenario
-from .simulator import DEFAULT_NOISE_DENSITY, SimulationConfig, Simulator
 
 
 class _Parser(argparse.ArgumentParser):
@@ -57,6 +54,9 @@ def _check_out_path(path):
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    import numpy as np
+
+    from .simulator import SimulationConfig, Simulator  # compiled kernels (numba): not for --help
     try:
         if args.scenario is not None:
             if args.duration is None or not args.duration > 0:

@@ -30,6 +30,7 @@ from bearing_common.states import FaultState
 from .defects import inner_race_window, outer_race_window
 from .integrator import STAT_REJECTS, STAT_RHS, STAT_STEPS, default_atol, integrate_interval
 from .model_parameters import (
+    DEFAULT_NOISE_DENSITY,  # noqa: F401  (re-exported: the simulator's documented noise level)
     DEFECT_DEPTH,
     DEFECT_WIDTH,
     M_PER_INCH,
@@ -42,9 +43,6 @@ from .resampling import design_lowpass, fine_factor, fir_decimate
 from .rotor_rhs import DOF_HOUSING_Y_DE, NDOF, NSTATE, rhs_py, static_equilibrium
 from .schedule import validate_schedule
 
-#: Broadband level of the real CWRU normal record 97 (about 0.07 g RMS over
-#: 0-24 kHz), (m/s^2)/sqrt(Hz): the documented value to use when noise is wanted.
-DEFAULT_NOISE_DENSITY = 4.5e-3
 MIN_SAMPLE_RATE = 4000.0  #: Hz: below this the BPFI harmonics and resonances are lost
 MAX_SAMPLE_RATE = 1.0e6  #: Hz (the thesis' rate)
 MAX_RPM = 6000.0
