@@ -29,13 +29,12 @@ import numpy as np
 from bearing_common.states import FaultState
 from bearing_diagnoser.accuracy import LabelledRecording, evaluate
 from bearing_recordings.recording import MEASURED_RPM_TOLERANCE, InputError, Recording
+from benchmarks.evaluation import STEADY_RATE, STEADY_RPM, steady_run
 
 #: Resolution of a limit (dB; the search steps twice that) and the lowest fault level tried (dB).
 STEP_DB, FLOOR_DB = 3.0, -60.0
 #: The simulator's noise: the highest and lowest signal-to-noise ratio tried (dB, fault signal RMS over noise RMS).
 SIM_SNR_DB = (24.0, -36.0)
-#: The simulated machine: sample rate (Hz) and shaft speed (rev/min).
-SIM_RATE, SIM_RPM = 12000.0, 1800.0
 
 
 @lru_cache(maxsize=64)
@@ -101,19 +100,11 @@ class SimulatedFault:
         return f"SNR {self.snr_db:.0f} dB"
 
     def load(self) -> Recording:
-        x = _simulated(self.truth, self.duration_s)
+        x = steady_run(self.truth, self.duration_s)
         rng = np.random.default_rng(int(self.truth) * 1000 + int(round(10 * self.snr_db)) % 1000)
         noise = rng.standard_normal(x.size) * np.sqrt(np.mean(x ** 2)) * 10 ** (-self.snr_db / 20)
-        return Recording(x + noise, SIM_RATE, SIM_RPM, "simulator", None, "accel", f"sim:{self.name}",
+        return Recording(x + noise, STEADY_RATE, STEADY_RPM, "simulator", None, "accel", f"sim:{self.name}",
                          rpm_tolerance=MEASURED_RPM_TOLERANCE)
-
-
-@lru_cache(maxsize=4)
-def _simulated(state: FaultState, duration_s: float) -> np.ndarray:
-    """One noise-free run of the simulator (m/s²)."""
-    from bearing_sim.simulator import SimulationConfig, simulate
-    d = simulate(SimulationConfig(rpm=SIM_RPM, sample_rate=SIM_RATE), [(state, duration_s)])
-    return np.asarray(d["accel"], float)
 
 
 @dataclass

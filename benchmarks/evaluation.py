@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from bearing_common.states import FaultState
@@ -12,6 +14,18 @@ N, O, I = FaultState.NORMAL, FaultState.OUTER_RACE, FaultState.INNER_RACE
 #: The thesis' eight cases (section 3.2): two segments each.
 THESIS_CASES = {"or": (O, O), "ir": (I, I), "or-ir": (O, I), "ir-or": (I, O), "or-normal": (O, N),
                 "normal-or": (N, O), "ir-normal": (I, N), "normal-ir": (N, I)}
+
+
+#: The steady simulated runs of the long benchmarks (detection curves, false alarms): Hz, rev/min.
+STEADY_RATE, STEADY_RPM = 12000.0, 1800.0
+
+
+@lru_cache(maxsize=4)
+def steady_run(state: FaultState, duration_s: float) -> np.ndarray:
+    """One noise-free simulator run of ``state`` for ``duration_s`` at STEADY_RPM and STEADY_RATE (m/s²)."""
+    from bearing_sim.simulator import SimulationConfig, simulate
+    d = simulate(SimulationConfig(rpm=STEADY_RPM, sample_rate=STEADY_RATE), [(state, duration_s)])
+    return np.asarray(d["accel"], float)
 
 
 def simulate_case(name: str, rpm: float = 1800.0, noise_density: float = 0.0, segment_s: float = 0.2,

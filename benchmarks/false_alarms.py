@@ -37,7 +37,6 @@ import time
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -51,10 +50,11 @@ from bearing_diagnoser.accuracy import load_manifest  # noqa: E402
 from bearing_diagnoser.front_ends import config_for  # noqa: E402
 from bearing_diagnoser.pipeline import MonitorPipeline  # noqa: E402
 from bearing_recordings.recording import MEASURED_RPM_TOLERANCE  # noqa: E402
+from benchmarks.evaluation import STEADY_RATE, STEADY_RPM, steady_run  # noqa: E402
 
 MANIFEST = ROOT / "benchmarks" / "shared_data.yaml"
-#: The simulated stream: base run (s), sample rate (Hz), speed (rev/min), noise density ((m/s²)/√Hz).
-BASE_S, SIM_RATE, SIM_RPM, SIM_NOISE = 60.0, 12000.0, 1800.0, 4.5e-3
+#: The simulated stream (at evaluation.STEADY_RATE, STEADY_RPM): base run (s), noise density ((m/s²)/√Hz).
+BASE_S, SIM_NOISE = 60.0, 4.5e-3
 #: Chunk length fed to the sessions (s); the decision does not depend on it.
 CHUNK_S = 1.0
 #: Gap between two passes of a recording (s).
@@ -78,21 +78,14 @@ class StreamResult:
         return self.alarms / self.hours if self.hours else float("nan")
 
 
-@lru_cache(maxsize=1)
-def _healthy_simulation() -> np.ndarray:
-    from bearing_sim.simulator import SimulationConfig, simulate
-    d = simulate(SimulationConfig(rpm=SIM_RPM, sample_rate=SIM_RATE), [(FaultState.NORMAL, BASE_S)])
-    return np.asarray(d["accel"], float)
-
-
 def _passes(name: str, seed: int):
     """(sample rate, rpm, rpm tolerance, bearing, gap between passes (samples), generator of the stream's
     passes) of stream ``name``."""
     if name == "simulator":
-        base = _healthy_simulation()
-        sigma = SIM_NOISE * np.sqrt(SIM_RATE / 2)
+        base = steady_run(FaultState.NORMAL, BASE_S)
+        sigma = SIM_NOISE * np.sqrt(STEADY_RATE / 2)
         rng = np.random.default_rng(seed)
-        return SIM_RATE, SIM_RPM, MEASURED_RPM_TOLERANCE, load_bearing("6205"), 0, (
+        return STEADY_RATE, STEADY_RPM, MEASURED_RPM_TOLERANCE, load_bearing("6205"), 0, (
             base + sigma * rng.standard_normal(base.size) for _ in iter(int, 1))
     entry = next(e for e in load_manifest(MANIFEST) if f"{e.dataset} {e.name}" == name)
     rec = entry.load()
