@@ -91,7 +91,7 @@ def _mkdir(path):
     (lambda p: p / "missing.npz", "no such file"),
     (lambda p: _write(p / "bad.mat", b"garbage"), "not a MATLAB 5/7 MAT-file"),
     (lambda p: _write(p / "bad.npz", b"not a zip"), "not a readable .npz"),
-    (lambda p: _write(p / "x.csv", "1,2"), "unknown file type"),
+    (lambda p: _write(p / "x.xls", "1,2"), "unknown file type"),
     (lambda p: write_npz(p / "nan.npz", np.r_[np.zeros(100), np.nan, np.zeros(50000)]), "non-finite"),
     (lambda p: write_npz(p / "inf.npz", np.r_[np.zeros(100), np.inf, np.zeros(50000)]), "non-finite"),
     (lambda p: write_npz(p / "empty.npz", np.zeros(0)), "no samples"),

@@ -1,10 +1,11 @@
 """Many recordings diagnosed in one run: one file's whole diagnosis as a report, over a pool of worker processes.
 
 :func:`diagnose_file` is what ``bearing-diagnose`` does for one file — load it, pick the
-bearing, run :func:`.recording_diagnosis.diagnose_recording`, write any figures — and
-returns a :class:`FileReport`: the segments' JSON objects and what stderr should say. A
-file that cannot be diagnosed is a report with its error line, never an exception, so that
-one bad file does not end a batch.
+bearing, run :func:`.recording_diagnosis.diagnose_recording`, write any figures and HTML
+report — and returns a :class:`FileReport`: the segments' JSON objects, their evidence in
+physical terms (:mod:`.reports.diagnosis_summary`) and what stderr should say. A file that
+cannot be diagnosed is a report with its error line, never an exception, so that one bad
+file does not end a batch.
 
 :func:`run_batch` runs it over many files, in this process (``jobs=1``) or in ``jobs``
 worker processes, each importing the diagnosis once (forked from this one, which has
@@ -41,13 +42,15 @@ NOTE_LOGGERS = ("bearing_diagnoser", "bearing_recordings")
 class FileOptions:
     """The options of a run, applied to every file as to one file alone (so that a file's lines in a
     batch are those of its own run): sample rate (Hz), shaft speed (rev/min) and its relative
-    tolerance, channel, units of a one-signal file, bearing (None: the recording's), model set, method."""
+    tolerance, channel, units or sensitivity of a file that does not state what its numbers measure,
+    bearing (None: the recording's), model set, method."""
 
     sample_rate: float | None = None
     rpm: float | None = None
     rpm_tolerance: float | None = None
     channel: str | None = None
     units: str | None = None
+    sensitivity: str | None = None
     bearing: Bearing | None = None
     model_set: str | None = None
     method: str = "model"
@@ -55,14 +58,16 @@ class FileOptions:
 
 @dataclass
 class FileReport:
-    """One file's outcome: ``lines``, the JSON objects of its segments; ``notes``, its stderr lines
-    in order (without the program's name); ``error``, the one-line reason it failed ("" when it
-    did not) and ``status`` the exit status it asks for (0, :data:`EXIT_BAD_INPUT` or
-    :data:`EXIT_FAILED`); ``signal_s`` the recording's length (s) and ``cpu_s`` the CPU time
-    (s) its diagnosis took."""
+    """One file's outcome: ``lines``, the JSON objects of its segments; ``summary``, the verdict's
+    evidence in physical terms (:func:`.reports.diagnosis_summary.summarise`; empty when it
+    failed); ``notes``, its stderr lines in order (without the program's name); ``error``, the
+    one-line reason it failed ("" when it did not) and ``status`` the exit status it asks for (0,
+    :data:`EXIT_BAD_INPUT` or :data:`EXIT_FAILED`); ``signal_s`` the recording's length (s) and
+    ``cpu_s`` the CPU time (s) its diagnosis took."""
 
     path: str
     lines: list = field(default_factory=list)
+    summary: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
     error: str = ""
     status: int = 0
@@ -86,14 +91,16 @@ class _Notes(logging.Handler):
         self.emit_note(record.getMessage())
 
 
-def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None,
+def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, report_path: str | None = None,
                   emit: Callable[[str], None] | None = None) -> FileReport:
     """Diagnose the recording at ``path`` (module docstring); ``plot_dir``: write its figures there;
-    ``emit``: called with each note as it arises (else they are only collected)."""
+    ``report_path``: write its HTML report there; ``emit``: called with each note as it arises
+    (else they are only collected)."""
     from bearing_recordings.load import load_recording
     from bearing_recordings.recording import InputError
 
     from .recording_diagnosis import diagnose_recording
+    from .reports.diagnosis_summary import summarise
 
     report = FileReport(path)
     notes = _Notes(report, emit)
@@ -105,7 +112,7 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None,
     cpu = time.process_time()
     try:
         rec = load_recording(path, sample_rate=options.sample_rate, rpm=options.rpm, channel=options.channel,
-                             units=options.units)
+                             units=options.units, sensitivity=options.sensitivity)
         report.signal_s = rec.duration
         for note in rec.notes or ():
             notes.emit_note(note)
@@ -124,8 +131,11 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None,
         notes.emit_note(f"warning: {len(res.not_diagnosed)} windows not diagnosed, first at {start:.3f}-{end:.3f} s: "
                         f"{problem}")
     report.lines = [seg.to_json() for seg in res.segments]
+    report.summary = summarise(res, rec, res.bearing)
     if plot_dir is not None:
         _write_figures(res, plot_dir, report, notes)
+    if report_path is not None:
+        _write_report(res, rec, report_path, report, notes)
     return report
 
 
@@ -140,12 +150,23 @@ def _write_figures(res, plot_dir: str, report: FileReport, notes: _Notes) -> Non
         report.error, report.status = f"cannot write figures to {plot_dir}: {exc}", EXIT_FAILED
 
 
+def _write_report(res, rec, report_path: str, report: FileReport, notes: _Notes) -> None:
+    try:
+        from .reports.diagnosis_page import write_diagnosis_page
+        write_diagnosis_page(res, rec, report.lines, report.summary, report_path)
+        notes.emit_note(f"wrote the report {report_path}")
+    except ImportError as exc:
+        report.error, report.status = f"--report needs matplotlib ({exc})", EXIT_FAILED
+    except OSError as exc:
+        report.error, report.status = f"cannot write the report {report_path}: {exc}", EXIT_FAILED
+
+
 def _guarded(task: tuple, emit: Callable[[str], None] | None = None) -> FileReport:
     """:func:`diagnose_file` for one task of a batch: an unexpected error (a defect, not the input's)
     becomes the file's report too, with the exception's type and where it arose."""
-    path, options, plot_dir = task
+    path, options, plot_dir, report_path = task
     try:
-        return diagnose_file(path, options, plot_dir, emit)
+        return diagnose_file(path, options, plot_dir, report_path, emit)
     except Exception as exc:  # a defect on one file must not end the batch: reported, exit status 1
         where = traceback.extract_tb(exc.__traceback__)[-1]
         place = f"{where.name} ({where.filename.rsplit('/', 1)[-1]}:{where.lineno})"
@@ -153,13 +174,15 @@ def _guarded(task: tuple, emit: Callable[[str], None] | None = None) -> FileRepo
 
 
 def run_batch(paths: list[str], options: FileOptions, jobs: int = 1, plot_dirs: list | None = None,
-              on_done: Callable[[FileReport], None] | None = None,
-              emit: Callable[[str, str], None] | None = None) -> Iterator[FileReport]:
+              on_done: Callable[[FileReport], None] | None = None, emit: Callable[[str, str], None] | None = None,
+              report_paths: list | None = None) -> Iterator[FileReport]:
     """Reports of ``paths``, in their order (module docstring); ``plot_dirs``: each file's figure
-    directory (None: no figures); ``on_done``: called with each report as its file finishes (in the
-    order they finish); ``emit``: called with (path, note) for each note, as it arises when ``jobs``
-    is 1, else just before its report is yielded (the workers' notes come with their reports)."""
-    tasks = [(p, options, d) for p, d in zip(paths, plot_dirs or [None] * len(paths))]
+    directory (None: no figures); ``report_paths``: each file's HTML report (None: none);
+    ``on_done``: called with each report as its file finishes (in the order they finish); ``emit``:
+    called with (path, note) for each note, as it arises when ``jobs`` is 1, else just before its
+    report is yielded (the workers' notes come with their reports)."""
+    tasks = [(p, options, d, r) for p, d, r in zip(paths, plot_dirs or [None] * len(paths),
+                                                   report_paths or [None] * len(paths))]
     done = on_done or (lambda report: None)
     if jobs <= 1 or len(tasks) <= 1:
         for task in tasks:

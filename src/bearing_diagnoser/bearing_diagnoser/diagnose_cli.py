@@ -1,14 +1,18 @@
 """``bearing-diagnose``: offline diagnosis of recordings, one JSON object per state segment.
 
     bearing-diagnose PATH... [--jobs N] [--progress | --no-progress] [--rpm RPM] [--sample-rate HZ]
-                     [--channel NAME] [--bearing NAME|FILE.yaml] [--units g|m/s2] [--model-set NAME]
-                     [--method model|envelope] [--plot DIR]
+                     [--channel NAME] [--bearing NAME|FILE.yaml] [--units g|m/s2 | --sensitivity S]
+                     [--model-set NAME] [--method model|envelope] [--plot DIR] [--report DIR] [--json]
 
 PATH is a ``bearing-sim`` .npz, a MATLAB recording (CWRU, MFPT, or one signal such as
-HIT-SM; see ``bearing_recordings.mat_files``), a rosbag2 directory, or a folder of any of
-these (walked: ``bearing_recordings.recording_files``). Stdout: one JSON object per line
-(``shared/CONTRACT.md``); with several paths or a folder, each also carries ``"file"``, in
-the order of the files whatever ``--jobs`` runs in parallel. Stderr: the model set, bearing,
+HIT-SM; see ``bearing_recordings.mat_files``), a CSV/TSV table or a WAV file
+(``bearing_recordings.table_files``, ``wav_files``), a rosbag2 directory, or a folder of any
+of these (walked: ``bearing_recordings.recording_files``). Stdout: one JSON object per line
+(``shared/CONTRACT.md``) when it is not a terminal or with ``--json``, else the verdict and
+its evidence in words (:mod:`.reports.terminal_text`); with several paths or a folder, each
+JSON line also carries ``"file"``, in the order of the files whatever ``--jobs`` runs in
+parallel. ``--report DIR`` writes one HTML page per file (:mod:`.reports.diagnosis_page`).
+Stderr: the model set, bearing,
 any resampling, the speed, sensor problems (each file's prefixed with it in a batch), and per
 file that cannot be diagnosed one ``error:`` line. The options apply to every file as
 they would to it alone, so a file's lines in a batch are those of its own run. Exit status 0, or 2 when any file was bad
@@ -32,8 +36,8 @@ def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``bearing-diagnose``."""
     p = argparse.ArgumentParser(prog=PROG, description="Diagnose bearing vibration recordings offline.")
     p.add_argument("paths", nargs="+", metavar="PATH",
-                   help="bearing-sim .npz, MATLAB .mat (CWRU, MFPT, one signal), rosbag2 directory, or a folder "
-                        "of these (walked)")
+                   help="bearing-sim .npz, MATLAB .mat (CWRU, MFPT, one signal), CSV/TSV table, WAV file, rosbag2 "
+                        "directory, or a folder of these (walked)")
     p.add_argument("--jobs", "-j", type=_jobs, default=1, metavar="N",
                    help="diagnose N files at a time in worker processes (default 1; 0: one per available core)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -43,15 +47,25 @@ def build_parser() -> argparse.ArgumentParser:
                    help="relative accuracy of --rpm (default 0.10, a nameplate's; the speed is measured from the "
                         "vibration within it, and beyond it reported); a file's own speed keeps the file's")
     p.add_argument("--sample-rate", type=float, help="input sample rate (Hz); required where the file has none")
-    p.add_argument("--channel", help="channel/variable name, e.g. X105_DE_time (default: the drive end)")
+    p.add_argument("--channel", help="channel: .mat variable (e.g. X105_DE_time; default the drive end), CSV column "
+                                     "name or number, WAV channel number, bag vibration topic")
     p.add_argument("--bearing", metavar="NAME|FILE.yaml",
                    help="monitored bearing: catalog name (6205, 6203, mfpt, za2115), YAML file or "
                         "'N,d,D,angle' (default: the recording's, else 6205)")
-    p.add_argument("--units", choices=("g", "m/s2"), help="unit of a one-signal .mat file (default g)")
+    p.add_argument("--units", choices=("g", "m/s2"),
+                   help="what the numbers of a file that does not say it measure: one-signal .mat, CSV (default g, "
+                        "or the column name's unit), WAV (no default)")
+    p.add_argument("--sensitivity", metavar="S",
+                   help="instead of --units, the numbers are a sensor's output: e.g. 100mV/g or 10.2mV/(m/s2) "
+                        "(numbers in volts), 0.05/g (plain numbers, e.g. WAV integer PCM as fractions of full scale)")
     p.add_argument("--model-set", help="sim_48k, sim_12k, cwru_de_6205 or none (default: from the input)")
     p.add_argument("--method", choices=("model", "envelope"), default="model",
                    help="model: observers + envelope-spectrum decision (default); envelope: textbook reference")
     p.add_argument("--plot", metavar="DIR", help="write figures to DIR (with several files: DIR/<file name>/)")
+    p.add_argument("--report", metavar="DIR",
+                   help="write one self-contained HTML page per file to DIR/<file name>.html")
+    p.add_argument("--json", action="store_true",
+                   help="JSON lines on stdout also on a terminal (they are the default when stdout is not one)")
     return p
 
 
@@ -72,26 +86,26 @@ def _options(args):
     """The run's :class:`.batch_diagnosis.FileOptions`, checked once for every file (InputError,
     BearingError)."""
     from bearing_common.bearings import load_bearing
+    from bearing_recordings.measurement_units import parse_sensitivity
     from bearing_recordings.recording import InputError, check_rate, check_rpm
 
     from .batch_diagnosis import FileOptions
 
     if args.rpm_tolerance is not None and not 0.0 < args.rpm_tolerance < 0.5:
         raise InputError(f"--rpm-tolerance must be in (0, 0.5), got {args.rpm_tolerance:g}")
+    if args.units is not None and args.sensitivity is not None:
+        raise InputError("give --units or --sensitivity, not both")
+    if args.sensitivity is not None:
+        parse_sensitivity(args.sensitivity)
     return FileOptions(sample_rate=None if args.sample_rate is None else check_rate(args.sample_rate),
                        rpm=None if args.rpm is None else check_rpm(args.rpm), rpm_tolerance=args.rpm_tolerance,
-                       channel=args.channel, units=args.units,
+                       channel=args.channel, units=args.units, sensitivity=args.sensitivity,
                        bearing=load_bearing(args.bearing) if args.bearing else None, model_set=args.model_set,
                        method=args.method)
 
 
-def _plot_dirs(root: str | None, paths: list[str], batch: bool) -> list | None:
-    """Each file's figure directory: ``root`` itself for one file, else ``root``/<file name>
-    (numbered from -2 on where two files share a name)."""
-    if root is None:
-        return None
-    if not batch:
-        return [root]
+def _file_names(paths: list[str]) -> list[str]:
+    """A name per file: its stem (numbered from -2 on where two files share one)."""
     out, used = [], set()
     for path in paths:
         stem = Path(path).stem or Path(path).name
@@ -100,8 +114,20 @@ def _plot_dirs(root: str | None, paths: list[str], batch: bool) -> list | None:
             k += 1
             name = f"{stem}-{k}"
         used.add(name)
-        out.append(str(Path(root) / name))
+        out.append(name)
     return out
+
+
+def _plot_dirs(root: str | None, paths: list[str], batch: bool) -> list | None:
+    """Each file's figure directory: ``root`` itself for one file, else ``root``/<file name>."""
+    if root is None:
+        return None
+    return [str(Path(root) / name) for name in _file_names(paths)] if batch else [root]
+
+
+def _report_paths(root: str | None, paths: list[str]) -> list | None:
+    """Each file's HTML report: ``root``/<file name>.html."""
+    return None if root is None else [str(Path(root) / f"{name}.html") for name in _file_names(paths)]
 
 
 class _Console:
@@ -138,8 +164,10 @@ def main(argv=None) -> int:
     from bearing_recordings.recording_files import expand, is_folder
 
     from .batch_diagnosis import run_batch
+    from .reports.terminal_text import diagnosis_text
 
     batch = len(args.paths) > 1 or any(is_folder(p) for p in args.paths)
+    readable = not args.json and sys.stdout.isatty()
     try:
         options = _options(args)
     except (InputError, BearingError) as exc:
@@ -159,8 +187,11 @@ def main(argv=None) -> int:
     try:
         for report in run_batch(paths, options, args.jobs, _plot_dirs(args.plot, paths, batch),
                                 on_done=bar and (lambda r: bar.advance(r.signal_s, bool(r.error))),
-                                emit=lambda path, note: out.note(tag(path) + note)):
-            for line in report.lines:
+                                emit=lambda path, note: out.note(tag(path) + note),
+                                report_paths=_report_paths(args.report, paths)):
+            if readable and report.lines:
+                out.write(diagnosis_text(report.path, report.lines, report.summary), sys.stdout)
+            for line in report.lines if not readable else ():
                 out.write(json.dumps({"file": report.path} | line if batch else line), sys.stdout)
             if report.error:
                 out.note(f"error: {tag(report.path)}{_untagged(report.error, report.path) if batch else report.error}")

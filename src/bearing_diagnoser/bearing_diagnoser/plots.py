@@ -9,6 +9,9 @@
 * ``timeline.png`` — per-window significance of each hypothesis (÷ threshold), the chosen
   demodulation band and the shaft speed (envelope-spectrum decision) or the model-explains
   fractions (folding decision), window labels and the published state over time.
+
+:func:`states_figure` and :func:`timeline_figure` also make the figures of the HTML report
+(:mod:`.reports.diagnosis_page`).
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from .decision.thesis_blocks import train_autocorrelation, train_cross_correlati
 XCORR_MAX_S = 2.0
 
 
-def _plt():
+def pyplot():
+    """matplotlib's pyplot on the Agg backend (imported only when a figure is made)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -45,19 +49,15 @@ def _save(plt, fig, path: Path, paths: list[Path]) -> None:
     paths.append(path)
 
 
-def write_figures(result, directory) -> list[Path]:
-    """Write the figures of an :class:`~.recording_diagnosis.OfflineResult` into ``directory``; return their paths."""
-    plt = _plt()
-    out = Path(directory)
-    out.mkdir(parents=True, exist_ok=True)
-    paths: list[Path] = []
+def states_figure(result):
+    """The measurement, with the true state (simulator) and the diagnosed state, over time."""
+    plt = pyplot()
     fs = result.sample_rate
     x = result.accel
     t = np.arange(x.size) / fs
     labels = [s.label for s in FaultState]
-
     fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(10, 6))
-    ax1.plot(t, x, lw=0.4)
+    ax1.plot(t, x, lw=0.4, rasterized=True)  # rasterized: a vector copy of every sample is megabytes
     ax1.set_ylabel("acceleration (m/s²)")
     ax1.set_title(f"measurement and states ({result.model_set}, method {result.method})")
     if result.truth is not None:
@@ -69,7 +69,61 @@ def write_figures(result, directory) -> list[Path]:
     ax2.set_yticks(range(len(labels)), labels)
     ax2.set_xlabel("time (s)")
     ax2.legend(loc="upper right", fontsize=8)
-    _save(plt, fig, out / "acceleration_states.png", paths)
+    return fig
+
+
+def timeline_figure(result):
+    """Per window: each hypothesis' significance ÷ threshold, the chosen demodulation band and the
+    shaft speed (or the model-explains fractions), the window labels and the published state;
+    None when no window was decided."""
+    dec = result.decisions
+    if not dec:
+        return None
+    plt = pyplot()
+    labels = [s.label for s in FaultState]
+    fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(10, 7))
+    te = np.asarray([d.window_end for d in dec])
+    for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL):
+        if any(h in d.scores.significance for d in dec):
+            a1.plot(te, [d.scores.significance.get(h, np.nan) for d in dec],
+                    label=f"{h.label} significance ÷ threshold")
+    a1.axhline(1.0, color="k", ls="--", lw=0.8)
+    a1.legend(fontsize=8)
+    bands = [getattr(d.scores, "band", None) for d in dec]
+    if any(b is not None for b in bands):
+        lo = np.asarray([np.nan if b is None else b.low for b in bands])
+        hi = np.asarray([np.nan if b is None else b.high for b in bands])
+        a2.fill_between(te, lo / 1e3, hi / 1e3, step="pre", alpha=0.4, label="chosen demodulation band (kHz)")
+        a2.set_ylabel("kHz")
+        speed = a2.twinx()
+        speed.plot(te, [d.scores.speed_hz * 60.0 for d in dec], color="C1", lw=0.8,
+                   label="shaft speed used (rpm)")
+        speed.set_ylabel("rpm")
+        speed.legend(loc="lower right", fontsize=8)
+    else:
+        for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE):
+            a2.plot(te, [d.scores.explained.get(h, np.nan) for d in dec], label=f"{h.label} model explains")
+        a2.set_ylim(-1.05, 1.05)
+    a2.legend(loc="upper left", fontsize=8)
+    tl, lab = _state_track(dec, "label")
+    ts, sta = _state_track(dec, "state")
+    a3.plot(tl, lab, ".", ms=3, label="window label")
+    a3.step(ts, sta, where="post", label="published state")
+    a3.set_yticks(range(len(labels)), labels)
+    a3.set_xlabel("decision time (s)")
+    a3.legend(fontsize=8)
+    return fig
+
+
+def write_figures(result, directory) -> list[Path]:
+    """Write the figures of an :class:`~.recording_diagnosis.OfflineResult` into ``directory``; return their paths."""
+    plt = pyplot()
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    paths: list[Path] = []
+    fs = result.sample_rate
+    t = np.arange(result.accel.size) / fs
+    _save(plt, states_figure(result), out / "acceleration_states.png", paths)
 
     for h, st in result.streams.items():
         r, u = st["residual"], st["impulse_train"]
@@ -96,38 +150,7 @@ def write_figures(result, directory) -> list[Path]:
         ax.legend(loc="upper right", fontsize=8)
         _save(plt, fig, out / f"xcorr_{h}.png", paths)
 
-    dec = result.decisions
-    if dec:
-        fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(10, 7))
-        te = np.asarray([d.window_end for d in dec])
-        for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL):
-            if any(h in d.scores.significance for d in dec):
-                a1.plot(te, [d.scores.significance.get(h, np.nan) for d in dec],
-                        label=f"{h.label} significance ÷ threshold")
-        a1.axhline(1.0, color="k", ls="--", lw=0.8)
-        a1.legend(fontsize=8)
-        bands = [getattr(d.scores, "band", None) for d in dec]
-        if any(b is not None for b in bands):
-            lo = np.asarray([np.nan if b is None else b.low for b in bands])
-            hi = np.asarray([np.nan if b is None else b.high for b in bands])
-            a2.fill_between(te, lo / 1e3, hi / 1e3, step="pre", alpha=0.4, label="chosen demodulation band (kHz)")
-            a2.set_ylabel("kHz")
-            speed = a2.twinx()
-            speed.plot(te, [d.scores.speed_hz * 60.0 for d in dec], color="C1", lw=0.8,
-                       label="shaft speed used (rpm)")
-            speed.set_ylabel("rpm")
-            speed.legend(loc="lower right", fontsize=8)
-        else:
-            for h in (FaultState.OUTER_RACE, FaultState.INNER_RACE):
-                a2.plot(te, [d.scores.explained.get(h, np.nan) for d in dec], label=f"{h.label} model explains")
-            a2.set_ylim(-1.05, 1.05)
-        a2.legend(loc="upper left", fontsize=8)
-        tl, lab = _state_track(dec, "label")
-        ts, sta = _state_track(dec, "state")
-        a3.plot(tl, lab, ".", ms=3, label="window label")
-        a3.step(ts, sta, where="post", label="published state")
-        a3.set_yticks(range(len(labels)), labels)
-        a3.set_xlabel("decision time (s)")
-        a3.legend(fontsize=8)
-        _save(plt, fig, out / "timeline.png", paths)
+    timeline = timeline_figure(result)
+    if timeline is not None:
+        _save(plt, timeline, out / "timeline.png", paths)
     return paths

@@ -53,6 +53,7 @@ class OfflineResult:
     cpu_s: float = 0.0
     method: str = "model"
     not_diagnosed: list = field(default_factory=list)  # (start s, end s, why: a sensor or speed problem)
+    bearing: Bearing | None = None  # the bearing diagnosed
 
 
 def _speed(rec: Recording, rpm: float | None) -> float | None:
@@ -154,7 +155,8 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     segs = segments_from_decisions(decisions, x.size / fs, ms)
     if decisions and not segs:
         raise InputError(f"no window could be diagnosed: {problems[0][2]}")
-    return OfflineResult(segs, decisions, ms, fs, speed, x, truth, pipeline.kept_streams(), cpu, method, problems)
+    return OfflineResult(segs, decisions, ms, fs, speed, x, truth, pipeline.kept_streams(), cpu, method, problems,
+                         bearing)
 
 
 def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",

@@ -15,7 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from bearing_common.bearings import CATALOG
 from bearing_common.units import STANDARD_GRAVITY, sample_rate_problem
+
+from .recording import InputError, Recording, check_rate, check_rpm
 
 #: Column of each acceleration channel.
 CHANNELS = {"horizontal": 4, "vertical": 5}
@@ -84,3 +87,20 @@ def read_snapshot(path: Path, channel: str = DEFAULT_CHANNEL) -> FemtoSnapshot:
     if problem:
         raise SnapshotFileError(f"the sample clock shows a {problem}")
     return FemtoSnapshot(float(clock[0]), rows[:, column] * STANDARD_GRAVITY, float(rate))
+
+
+def load_snapshot_recording(path: Path, sample_rate: float | None = None, rpm: float | None = None,
+                            channel: str | None = None):
+    """One ``acc_*.csv`` snapshot as a :class:`~.recording.Recording` (``bearing-diagnose`` on one file):
+    the bearing is PRONOSTIA's (catalog ``femto``), the sample rate the sample clock's unless given."""
+    channel = (channel or DEFAULT_CHANNEL).lower()
+    if channel not in CHANNELS:
+        raise InputError(f"{path}: FEMTO snapshots have channels {', '.join(CHANNELS)}, not {channel!r}")
+    try:
+        snap = read_snapshot(Path(path), channel)
+    except SnapshotFileError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    fs = check_rate(snap.sample_rate if sample_rate is None else sample_rate)
+    return Recording(snap.samples, fs, None if rpm is None else check_rpm(rpm), "femto", None, channel, str(path),
+                     start_time=snap.clock, bearing=CATALOG["femto"],
+                     notes=[f"FEMTO snapshot, {channel} channel (g read as m/s²), {fs:g} Hz"])

@@ -33,14 +33,11 @@ import numpy as np
 from bearing_common.bearings import CATALOG
 from bearing_common.units import STANDARD_GRAVITY
 
+from .measurement_units import value_scale
 from .recording import MEASURED_RPM_TOLERANCE, InputError, Recording, check_rate, check_rpm, check_samples
 
 _CWRU_CHANNEL = re.compile(r"X(\d+)_(DE|FE|BA)_time")
 _CWRU_RPM = re.compile(r"X(\d+)RPM")
-
-#: Units a one-signal file may be declared in, as m/s² per unit.
-UNITS = {"g": STANDARD_GRAVITY, "m/s2": 1.0}
-
 
 #: MAT-file v5 element types (miMATRIX, miCOMPRESSED) and the byte size of numeric ones.
 _MI_MATRIX, _MI_COMPRESSED = 14, 15
@@ -142,12 +139,13 @@ def _scalar(value, what: str, path) -> float:
 
 
 def load_mat(path, sample_rate: float | None = None, rpm: float | None = None,
-             channel: str | None = None, units: str | None = None) -> Recording:
+             channel: str | None = None, units: str | None = None, sensitivity: str | None = None) -> Recording:
     """Load a MATLAB recording (MFPT, CWRU or one signal) in m/s².
 
     ``sample_rate`` (Hz) is required for CWRU and one-signal files and overrides MFPT's
-    ``sr``; ``rpm`` overrides the file's speed; ``units`` (``g`` or ``m/s2``) states the
-    unit of a one-signal file (default g, said in the recording's notes).
+    ``sr``; ``rpm`` overrides the file's speed; ``units`` (``g`` or ``m/s2``) or
+    ``sensitivity`` (:mod:`.measurement_units`) states what a one-signal file's numbers
+    measure (default g, said in the recording's notes).
     """
     m = _read(path)
     keys = sorted(k for k in m if not k.startswith("__"))
@@ -155,7 +153,7 @@ def load_mat(path, sample_rate: float | None = None, rpm: float | None = None,
         return _load_mfpt(path, m["bearing"], sample_rate, rpm, channel)
     if any(_CWRU_CHANNEL.fullmatch(k) for k in keys):
         return _load_cwru(path, m, keys, sample_rate, rpm, channel)
-    return _load_single(path, m, keys, sample_rate, rpm, channel, units)
+    return _load_single(path, m, keys, sample_rate, rpm, channel, units, sensitivity)
 
 
 def _need_rate(path, sample_rate, hint: str) -> float:
@@ -214,7 +212,7 @@ def _load_cwru(path, m, keys, sample_rate, rpm, channel) -> Recording:
                      rpm_tolerance=MEASURED_RPM_TOLERANCE if rpm is None and speed is not None else None)
 
 
-def _load_single(path, m, keys, sample_rate, rpm, channel, units) -> Recording:
+def _load_single(path, m, keys, sample_rate, rpm, channel, units, sensitivity) -> Recording:
     signals = [k for k in keys if np.asarray(m[k]).dtype.kind in "fiu" and np.asarray(m[k]).size > 1]
     if channel is None:
         if len(signals) != 1:
@@ -224,12 +222,7 @@ def _load_single(path, m, keys, sample_rate, rpm, channel, units) -> Recording:
     if channel not in keys:
         raise InputError(f"{path}: no channel {channel!r}; available: {', '.join(keys)}")
     fs = _need_rate(path, sample_rate, "the rig's documentation states it")
-    notes = []
-    if units is None:
-        units = "g"
-        notes.append(f"units of {channel} not stated; assuming g (give --units m/s2 otherwise)")
-    if units not in UNITS:
-        raise InputError(f"unknown units {units!r}; expected one of {', '.join(UNITS)}")
-    x = check_samples(m[channel], f"{path}:{channel}") * UNITS[units]
+    scale, note = value_scale(units, sensitivity, channel)
+    x = check_samples(m[channel], f"{path}:{channel}") * scale
     return Recording(x, fs, None if rpm is None else check_rpm(rpm), "mat", None, channel, str(path),
-                     notes=notes)
+                     notes=[note] if note else [])

@@ -1,6 +1,6 @@
 """Which paths are recordings: the files and rosbag2 directories named on a command line or held in folders.
 
-A recording is a ``.mat`` or ``.npz`` file, or a rosbag2 directory (one holding
+A recording is a ``.mat``, ``.npz``, ``.csv``, ``.tsv`` or ``.wav`` file, or a rosbag2 directory (one holding
 ``metadata.yaml``, or its storage files without it: a truncated bag, which its loader then
 refuses with the reason). Any other directory is a folder: walked in sorted order, hidden
 entries skipped, without descending into the bags it holds; files of other types in it are
@@ -13,8 +13,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-#: File name suffixes of the recordings :func:`bearing_recordings.load.load_recording` reads.
-RECORDING_SUFFIXES = (".mat", ".npz")
+#: File name suffixes of the recordings a folder holds (:func:`bearing_recordings.load.load_recording` reads
+#: them, and ``.txt`` tables named one by one).
+RECORDING_SUFFIXES = (".mat", ".npz", ".csv", ".tsv", ".wav")
 
 #: Storage files of a rosbag2 directory.
 BAG_STORAGE_SUFFIXES = (".mcap", ".db3")

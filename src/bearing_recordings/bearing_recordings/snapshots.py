@@ -4,11 +4,12 @@ What a PATH holds, and what a snapshot is in it:
 
 * **a folder of FEMTO ``acc_*.csv`` files** — one file is one snapshot (:mod:`.femto_files`);
   its time is the clock of its first sample, its rate what the sample clock shows.
-* **a folder of ``.mat`` / ``.npz`` recordings** (or one such file) — each file is a
-  continuous recording, loaded as ``bearing-diagnose`` loads it (:func:`.load.load_recording`:
-  channel rule, units, sample rate), and cut into windows as below. Files without a clock of
-  their own (MATLAB files, ``bearing-sim`` output, whose time starts at 0) are taken in name
-  order, each starting where the previous ended; the notes say so.
+* **a folder of ``.mat`` / ``.npz`` / ``.csv`` / ``.tsv`` / ``.wav`` recordings** (or one
+  such file) — each file is a continuous recording, loaded as ``bearing-diagnose`` loads it
+  (:func:`.load.load_recording`: channel rule, units, sample rate), and cut into windows as
+  below. Files without a clock of their own (MATLAB and WAV files, ``bearing-sim`` output,
+  tables without a time column: their time starts at 0) are taken in name order, each
+  starting where the previous ended; the notes say so.
 * **a rosbag2 directory** — the ``VibrationChunk`` s of the vibration topic (``channel``);
   chunks whose sample indices follow on from each other form one continuous stretch, a gap
   in the indices (or in the stamps) starts the next: a snapshot sensor's chunks with gaps
@@ -37,12 +38,11 @@ from bearing_common.units import sample_rate_problem
 
 from . import femto_files
 from .recording import InputError, check_rate
+from .recording_files import RECORDING_SUFFIXES
+from .table_files import TABLE_SUFFIXES
 
 #: Default window (s) a continuous stretch is cut into.
 DEFAULT_WINDOW = 1.0
-
-#: Recording file types a folder of recordings may hold.
-RECORDING_SUFFIXES = (".mat", ".npz")
 
 
 @dataclass(frozen=True)
@@ -110,13 +110,14 @@ def cut_stretch(t0: float, x: np.ndarray, fs: float, window: float, name: str) -
 
 def open_snapshots(path, channel: str | None = None, sample_rate: float | None = None,
                    rpm: float | None = None, window: float = DEFAULT_WINDOW,
-                   units: str | None = None) -> SnapshotSource:
+                   units: str | None = None, sensitivity: str | None = None) -> SnapshotSource:
     """The snapshots of ``path`` (see the module docstring); raises :class:`~.recording.InputError`.
 
     ``channel``: FEMTO ``horizontal`` (default) or ``vertical``; a ``.mat`` variable; a bag's
     relative vibration topic. ``sample_rate`` (Hz) overrides the files' (FEMTO: the sample
-    clock's; required for files that store none); ``rpm`` the data's speed; ``units`` the unit
-    of one-signal ``.mat`` files.
+    clock's; required for files that store none); ``rpm`` the data's speed; ``units`` or
+    ``sensitivity`` what the numbers of files that do not say it measure
+    (:mod:`.measurement_units`).
     """
     p = Path(path)
     if sample_rate is not None:
@@ -133,15 +134,15 @@ def open_snapshots(path, channel: str | None = None, sample_rate: float | None =
             return _femto_source(p, acc, channel, sample_rate, rpm)
         files = sorted(f for f in p.iterdir() if f.is_file() and f.suffix.lower() in RECORDING_SUFFIXES)
         if files:
-            return _recordings_source(p, files, channel, sample_rate, rpm, window, units)
-        raise InputError(f"{path}: no snapshots here: expected FEMTO acc_*.csv files, .mat/.npz recordings "
-                         "or a rosbag2 recording (metadata.yaml)")
-    if p.suffix.lower() in RECORDING_SUFFIXES:
-        return _recordings_source(p.parent, [p], channel, sample_rate, rpm, window, units)
+            return _recordings_source(p, files, channel, sample_rate, rpm, window, units, sensitivity)
+        raise InputError(f"{path}: no snapshots here: expected FEMTO acc_*.csv files, recordings "
+                         f"({', '.join(RECORDING_SUFFIXES)}) or a rosbag2 recording (metadata.yaml)")
     if femto_files.FILE_PATTERN.fullmatch(p.name):
         return _femto_source(p.parent, [p], channel, sample_rate, rpm)
+    if p.suffix.lower() in RECORDING_SUFFIXES + TABLE_SUFFIXES:
+        return _recordings_source(p.parent, [p], channel, sample_rate, rpm, window, units, sensitivity)
     raise InputError(f"{path}: unknown kind of input; expected a folder of FEMTO acc_*.csv snapshots, "
-                     "a folder of .mat/.npz recordings or a rosbag2 directory")
+                     f"a folder of recordings ({', '.join(RECORDING_SUFFIXES)}) or a rosbag2 directory")
 
 
 def _femto_source(folder: Path, files: list, channel, sample_rate, rpm) -> SnapshotSource:
@@ -175,7 +176,8 @@ def _femto_source(folder: Path, files: list, channel, sample_rate, rpm) -> Snaps
     return src
 
 
-def _recordings_source(folder: Path, files: list, channel, sample_rate, rpm, window, units) -> SnapshotSource:
+def _recordings_source(folder: Path, files: list, channel, sample_rate, rpm, window, units,
+                       sensitivity) -> SnapshotSource:
     from .load import load_recording
 
     src = SnapshotSource(str(folder if len(files) > 1 else files[0]), "recordings", channel or "")
@@ -186,7 +188,8 @@ def _recordings_source(folder: Path, files: list, channel, sample_rate, rpm, win
         t_next = 0.0
         for f in files:
             try:
-                rec = load_recording(f, sample_rate=sample_rate, rpm=rpm, channel=channel, units=units)
+                rec = load_recording(f, sample_rate=sample_rate, rpm=rpm, channel=channel, units=units,
+                                     sensitivity=sensitivity)
             except InputError as exc:
                 if len(files) == 1:
                     raise

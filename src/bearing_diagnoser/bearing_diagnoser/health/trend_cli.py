@@ -1,17 +1,21 @@
 """``bearing-trend``: condition trend and early warning over a machine's life, offline.
 
     bearing-trend PATH... [--bearing NAME|FILE.yaml] [--rpm RPM] [--sample-rate HZ] [--channel NAME]
-                  [--plot DIR] [--window S] [--baseline N|DURATION] [--machine-class CLASS] [--units g|m/s2]
+                  [--plot DIR] [--report DIR] [--json] [--window S] [--baseline N|DURATION]
+                  [--machine-class CLASS] [--units g|m/s2 | --sensitivity S]
 
-PATH is a folder of FEMTO ``acc_*.csv`` snapshots, a folder of ``.mat``/``.npz`` recordings
-(or one such file) or a rosbag2 directory (``bearing_recordings.snapshots``); each PATH is
+PATH is a folder of FEMTO ``acc_*.csv`` snapshots, a folder of ``.mat``/``.npz``/CSV/WAV
+recordings (or one such file) or a rosbag2 directory (``bearing_recordings.snapshots``); each PATH is
 one machine's life, fed as a snapshot sensor's chunks through the diagnoser session
 (:func:`monitor_pipeline`: the code the live node runs) — condition indicators and trend
 (:class:`.health_session.HealthSession`) with the fault-comb evidence each snapshot could
 give (``"evidence"``: a 0.1 s snapshot tests no hypothesis at 1800 rpm, and says why).
-Stdout: one JSON object per snapshot or window, ``{"t", "state", "indicators", ...}`` (t in s
-after the PATH's first snapshot, on the data's own clock), then ``{"summary": {...}}``; with
-several PATHs every line carries ``"path"``. Stderr: what was read and assumed, damaged
+Stdout, when it is not a terminal or with ``--json``: one JSON object per snapshot or window,
+``{"t", "state", "indicators", ...}`` (t in s after the PATH's first snapshot, on the data's
+own clock), then ``{"summary": {...}}``; with several PATHs every line carries ``"path"``. On
+a terminal: each state change as it comes, then the summary in words
+(:func:`.reports.terminal_text.trend_text`). ``--report DIR`` writes one HTML page per PATH
+(:mod:`.reports.trend_page`). Stderr: what was read and assumed, damaged
 snapshots (skipped and counted), the baseline and its limits; on bad input one ``error:``
 line per PATH and exit status 2 (the other PATHs are still scored).
 """
@@ -32,16 +36,21 @@ def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``bearing-trend``."""
     p = argparse.ArgumentParser(prog=PROG, description="Condition trend and early warning over a machine's life.")
     p.add_argument("paths", nargs="+", metavar="PATH",
-                   help="folder of FEMTO acc_*.csv snapshots, folder of .mat/.npz recordings, or rosbag2 directory")
+                   help="folder of FEMTO acc_*.csv snapshots, folder of .mat/.npz/.csv/.tsv/.wav recordings (or one), "
+                        "or rosbag2 directory")
     p.add_argument("--bearing", metavar="NAME|FILE.yaml",
                    help="monitored bearing (catalog name such as femto, 6205; YAML file; 'N,d,D,angle'); "
                         "with --rpm it keeps the default demodulation band above 3x the fault rates")
     p.add_argument("--rpm", type=float, help="shaft speed (rev/min); default from the data, if any")
     p.add_argument("--sample-rate", type=float,
                    help="sample rate (Hz); default the data's (FEMTO: from the sample clock)")
-    p.add_argument("--channel", help="FEMTO: horizontal (default) or vertical; .mat: the variable; "
-                                     "bag: the vibration topic (default vibration/drive_end)")
+    p.add_argument("--channel", help="FEMTO: horizontal (default) or vertical; .mat: the variable; CSV: column name "
+                                     "or number; WAV: channel number; bag: the vibration topic (default "
+                                     "vibration/drive_end)")
     p.add_argument("--plot", metavar="DIR", help="write the trend figure(s) to DIR")
+    p.add_argument("--report", metavar="DIR", help="write one self-contained HTML page per PATH to DIR/<name>.html")
+    p.add_argument("--json", action="store_true",
+                   help="JSON lines on stdout also on a terminal (they are the default when stdout is not one)")
     p.add_argument("--window", type=float, default=1.0,
                    help="continuous signal is cut into windows of this many s (default 1; "
                         "a snapshot shorter than two windows is scored whole)")
@@ -51,7 +60,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--machine-class", default=None,
                    help="ISO 20816-3 machine class: group1-rigid, group1-flexible, group2-rigid (default), "
                         "group2-flexible")
-    p.add_argument("--units", choices=("g", "m/s2"), help="unit of one-signal .mat files (default g)")
+    p.add_argument("--units", choices=("g", "m/s2"),
+                   help="what the numbers of files that do not say it measure: one-signal .mat, CSV (default g), WAV")
+    p.add_argument("--sensitivity", metavar="S",
+                   help="instead of --units, the numbers are a sensor's output: e.g. 100mV/g (volts), 0.05/g")
     return p
 
 
@@ -84,16 +96,18 @@ def monitor_pipeline(source, args):
                            rpm_tolerance=MEASURED_RPM_TOLERANCE, parameters=parameters, strict=False)
 
 
-def run_path(path: str, args, tag: dict):
-    """Score one PATH through :func:`monitor_pipeline`; returns the HealthMonitor and the records (the
-    records are printed as they come)."""
+def run_path(path: str, args, tag: dict, readable: bool = False):
+    """Score one PATH through :func:`monitor_pipeline`; returns the HealthMonitor, the records and the
+    summary (the records are printed as they come: JSON lines, or when ``readable`` the state changes)."""
     from collections import Counter
 
     from bearing_recordings.recording import InputError
     from bearing_recordings.snapshots import open_snapshots
 
+    from ..reports.terminal_text import trend_change_line, trend_text
+
     source = open_snapshots(path, channel=args.channel, sample_rate=args.sample_rate, rpm=args.rpm,
-                            window=args.window, units=args.units)
+                            window=args.window, units=args.units, sensitivity=args.sensitivity)
     for note in source.notes:
         _say(f"{path}: {note}")
     pipeline, records, first, rate = None, [], None, None
@@ -106,7 +120,10 @@ def run_path(path: str, args, tag: dict):
         for rec in pipeline.diagnoser.take_health():
             records.append(rec)
             no_evidence[rec.evidence.problem if rec.evidence is not None else ""] += 1
-            print(json.dumps({**tag, **rec.to_json()}), flush=True)
+            if not readable:
+                print(json.dumps({**tag, **rec.to_json()}), flush=True)
+            elif len(records) > 1 and rec.trend.state != records[-2].trend.state:
+                print(trend_change_line(path, rec.to_json()), flush=True)
     if source.damaged:
         name, why = source.damaged[0]
         _say(f"{path}: warning: {len(source.damaged)} damaged snapshot(s) skipped; first {name}: {why}")
@@ -125,8 +142,11 @@ def run_path(path: str, args, tag: dict):
     summary["damaged"] = len(source.damaged)
     summary["end"] = records[-1].trend.t
     _report_baseline(path, monitor)
-    print(json.dumps({**tag, "summary": summary}), flush=True)
-    return monitor, records
+    if readable:
+        print(trend_text(path, [r.to_json() for r in records], summary), flush=True)
+    else:
+        print(json.dumps({**tag, "summary": summary}), flush=True)
+    return monitor, records, summary
 
 
 def _report_baseline(path: str, monitor) -> None:
@@ -161,30 +181,55 @@ def main(argv=None) -> int:
         if args.bearing:
             from bearing_common.bearings import load_bearing
             load_bearing(args.bearing)
+        if args.units is not None and args.sensitivity is not None:
+            raise ValueError("give --units or --sensitivity, not both")
+        if args.sensitivity is not None:
+            from bearing_recordings.measurement_units import parse_sensitivity
+            parse_sensitivity(args.sensitivity)
     except (ValueError, BearingError) as exc:
         _say(f"error: {exc}")
         return EXIT_BAD_INPUT
     status, results = 0, []
+    readable = not args.json and sys.stdout.isatty()
     for path in args.paths:
         tag = {"path": path} if len(args.paths) > 1 else {}
         try:
-            results.append((path, *run_path(path, args, tag)))
+            results.append((path, *run_path(path, args, tag, readable)))
         except (InputError, BearingError, ValueError) as exc:
             _say(f"error: {exc}")
             status = EXIT_BAD_INPUT
-    if args.plot and results:
-        try:
-            from .trend_plot import write_trend_figure
-            for path, monitor, records in results:
-                out = write_trend_figure(records, monitor, args.plot, path)
-                _say(f"wrote {out}")
-        except ImportError as exc:
-            _say(f"error: --plot needs matplotlib ({exc})")
-            return 1
-        except OSError as exc:
-            _say(f"error: cannot write figures to {args.plot}: {exc}")
-            return 1
+    for option, write in (("plot", _write_figures), ("report", _write_reports)):
+        if getattr(args, option) and results:
+            try:
+                write(results, getattr(args, option))
+            except ImportError as exc:
+                _say(f"error: --{option} needs matplotlib ({exc})")
+                return 1
+            except OSError as exc:
+                _say(f"error: cannot write to {getattr(args, option)}: {exc}")
+                return 1
     return status
+
+
+def _write_figures(results: list, directory: str) -> None:
+    from .trend_plot import write_trend_figure
+    for path, monitor, records, _summary in results:
+        _say(f"wrote {write_trend_figure(records, monitor, directory, path)}")
+
+
+def _write_reports(results: list, directory: str) -> None:
+    from pathlib import Path
+
+    from ..reports.trend_page import write_trend_page
+    names: set = set()
+    for path, monitor, records, summary in results:
+        stem = Path(path).stem or "trend"
+        name, k = stem, 1
+        while name in names:
+            k += 1
+            name = f"{stem}-{k}"
+        names.add(name)
+        _say(f"wrote {write_trend_page(path, records, monitor, summary, Path(directory) / f'{name}.html')}")
 
 
 if __name__ == "__main__":  # pragma: no cover

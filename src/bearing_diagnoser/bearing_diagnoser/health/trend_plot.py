@@ -1,6 +1,7 @@
 """``bearing-trend --plot``: the trended indicators over the life, with the baseline, the limits and the states.
 
-matplotlib (Agg) is imported only here, only when a figure is asked for.
+matplotlib (Agg) is imported only here, only when a figure is asked for. :func:`trend_figure`
+also makes the figure of the HTML report (:mod:`bearing_diagnoser.reports.trend_page`).
 """
 
 from __future__ import annotations
@@ -34,14 +35,23 @@ def _time_axis(t_end: float) -> tuple[float, str]:
 
 def write_trend_figure(records, monitor, directory, name: str) -> Path:
     """Write ``<directory>/trend_<name>.png``; returns its path."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..plots import pyplot
 
     out_dir = Path(directory)
     out_dir.mkdir(parents=True, exist_ok=True)
     stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(name).name or "trend").strip("_") or "trend"
     path = out_dir / f"trend_{stem}.png"
+    fig = trend_figure(records, monitor, name)
+    fig.savefig(path, dpi=110)
+    pyplot().close(fig)
+    return path
+
+
+def trend_figure(records, monitor, name: str):
+    """The figure of :func:`write_trend_figure` (a matplotlib Figure; the caller closes it)."""
+    from ..plots import pyplot
+
+    plt = pyplot()
     tracker = monitor.tracker
     names = [n for n in tracker.names if n in PANELS]
     t = np.array([r.trend.t for r in records])
@@ -55,7 +65,7 @@ def write_trend_figure(records, monitor, directory, name: str) -> Path:
     for ax, n in zip(axes[1:], names):
         title, u, key = PANELS[n]
         values = np.array([_num(r.indicators.to_json().get(key)) for r in records])
-        ax.semilogy(ts, values, ".", ms=2.5, color="0.55", label="snapshot")
+        ax.semilogy(ts, values, ".", ms=2.5, color="0.55", label="snapshot", rasterized=True)
         if n in limits:
             k = _unit_scale(n)
             base, (warn, alarm), (m_warn, m_alarm) = limits[n][0] * k, limits[n][1], limits[n][2]
@@ -77,9 +87,7 @@ def write_trend_figure(records, monitor, directory, name: str) -> Path:
     axes[1].legend(fontsize=7, ncol=3, loc="upper left")
     axes[-1].set_xlabel(f"time since the first snapshot ({unit})")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return fig
 
 
 def _unit_scale(name: str) -> float:
