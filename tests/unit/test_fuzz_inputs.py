@@ -191,7 +191,20 @@ def _valid_npz() -> bytes:
     return buf.getvalue()
 
 
-VALID = {".mat": _valid_mat(), "compressed.mat": _valid_mat(compressed=True), ".npz": _valid_npz()}
+def _valid_csv() -> bytes:
+    y = white_noise(0.05, FS, 4.5e-3)
+    return ("time,accel (g)\n" + "".join(f"{i / FS!r},{v!r}\n" for i, v in enumerate(y))).encode()
+
+
+def _valid_wav() -> bytes:
+    from scipy.io import wavfile
+    buf = io.BytesIO()
+    wavfile.write(buf, int(FS), (white_noise(0.05, FS, 4.5e-3) * 1000).astype(np.int16))
+    return buf.getvalue()
+
+
+VALID = {".mat": _valid_mat(), "compressed.mat": _valid_mat(compressed=True), ".npz": _valid_npz(),
+         ".csv": _valid_csv(), ".wav": _valid_wav()}
 
 
 @settings(max_examples=CASES, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -204,7 +217,7 @@ def test_recording_loaders_refuse_garbage_and_cut_files_with_one_line(tmp_path, 
     path = tmp_path / f"f{suffix}"
     path.write_bytes(content)
     try:
-        rec = load_recording(path, sample_rate=FS)
+        rec = load_recording(path, sample_rate=FS, units="g")
     except InputError as exc:
         assert "\n" not in str(exc) and str(path) in str(exc)
     else:

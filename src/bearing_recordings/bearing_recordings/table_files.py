@@ -141,16 +141,15 @@ def read_table(path) -> Table:
     first = lines[0][1]
     header = None
     if not all(_is_number(c) for c in _cells(first, _delimiter(first))):
-        header = _cells(first, _delimiter(first))
+        header = first
         lines = lines[1:]
         if not lines:
-            raise InputError(f"{path}: a header ({', '.join(header)}) and no rows of numbers")
+            raise InputError(f"{path}: a header ({', '.join(_cells(first, _delimiter(first)))}) and no rows of "
+                             "numbers")
     if len(lines) > MAX_SAMPLES:
         raise InputError(f"{path}: {len(lines)} rows is more than the {MAX_SAMPLES} this tool reads at once; "
                          "split the recording")
     delimiter = _delimiter(lines[0][1])
-    if header is not None and delimiter != _delimiter(first) and len(header) > 1:
-        raise InputError(f"{path}: the header and the rows are separated differently")
     body = [line.replace('"', "").replace("'", "") for _, line in lines]
     if delimiter == ";":
         body = [line.replace(",", ".") for line in body]  # decimal commas
@@ -158,7 +157,12 @@ def read_table(path) -> Table:
         data = np.loadtxt(body, delimiter=delimiter, ndmin=2, dtype=float, comments=None)
     except ValueError:
         raise InputError(f"{path}: {_first_bad_row(body, [n for n, _ in lines], delimiter)}") from None
-    names = header if header is not None else [str(k + 1) for k in range(data.shape[1])]
+    if header is None:
+        names = [str(k + 1) for k in range(data.shape[1])]
+    elif delimiter is None and data.shape[1] == 1:  # one column: the whole line names it, spaces and all
+        names = [_cells(header, "\n")[0]]
+    else:
+        names = _cells(header, delimiter)
     if len(names) != data.shape[1]:
         raise InputError(f"{path}: the header names {len(names)} columns ({', '.join(names)}), the rows hold "
                          f"{data.shape[1]}")
@@ -192,9 +196,12 @@ def table_rate(table: Table, sample_rate: float | None) -> tuple[float, float]:
         raise InputError(f"{table.path}: the time column {table.names[index]!r} is not evenly spaced (row {k + 1} "
                          f"lies {off[k]:.2g} sample periods off); resample the recording, or give --sample-rate")
     rate = 1.0 / period
-    if abs(rate / round(rate) - 1.0) <= WHOLE_HZ:
+    if round(rate) and abs(rate / round(rate) - 1.0) <= WHOLE_HZ:
         rate = float(round(rate))
-    return check_rate(rate, "sample rate of the time column"), float(t[0])
+    try:
+        return check_rate(rate, "sample rate of the time column"), float(t[0])
+    except InputError as exc:
+        raise InputError(f"{table.path}: {exc}") from None
 
 
 def signal_column(table: Table, channel: str | None) -> int:
@@ -219,7 +226,10 @@ def load_table(path, sample_rate: float | None = None, rpm: float | None = None,
     index = signal_column(table, channel)
     fs, start = table_rate(table, sample_rate)
     name = table.names[index]
-    scale, note = value_scale(units, sensitivity, f"column {name!r}", file_units=table.unit(index))
+    try:
+        scale, note = value_scale(units, sensitivity, f"column {name!r}", file_units=table.unit(index))
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
     x = check_samples(table.data[:, index], f"{path}:{name}") * scale
     notes = [note] if note else []
     if sample_rate is None:

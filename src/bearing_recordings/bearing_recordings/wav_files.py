@@ -52,7 +52,10 @@ def load_wav(path, sample_rate: float | None = None, rpm: float | None = None, c
     if not (str(pick).isdigit() and 1 <= int(pick) <= channels):
         raise InputError(f"{path}: no channel {pick!r}; a WAV file's channels are numbered 1 to {channels}")
     samples = data if data.ndim == 1 else data[:, int(pick) - 1]
-    fs = check_rate(rate if sample_rate is None else sample_rate)
+    try:
+        fs = check_rate(rate if sample_rate is None else sample_rate)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
     scale, _ = value_scale(units, sensitivity, f"{path}", integer_fraction=data.dtype.kind != "f",
                            default_units=None)
     kind = f"{8 * data.dtype.itemsize}-bit {'float' if data.dtype.kind == 'f' else 'integer PCM'}"
