@@ -38,28 +38,29 @@ fuzz: setup
 	@BEARING_FUZZ_CASES=$(FUZZ_CASES) $(VENV_PY) -m pytest tests/unit/test_fuzz_inputs.py --hypothesis-profile=explore \
 		-o timeout=1800 -o faulthandler_timeout=300
 
+# each benchmark also writes its tables into the docs' generated blocks (benchmarks/doc_tables.py)
 bench: setup
-	@$(VENV_PY) benchmarks/run.py --out out/bench.md
+	@$(VENV_PY) benchmarks/run.py --out out/bench.md --docs docs/benchmarks.md
 
 # decisions on every development recording, against the textbook baseline, with ablations,
 # times to decision and detection curves (-> out/accuracy.md, out/detection_curves.png)
 accuracy: setup
-	@$(VENV_PY) benchmarks/accuracy_report.py --out out/accuracy.md --figure out/detection_curves.png
+	@$(VENV_PY) benchmarks/accuracy_report.py --out out/accuracy.md --figure out/detection_curves.png --docs docs/results.md
 
 # false alarms of the live decision on FALSE_ALARM_HOURS (default 10) of simulated healthy signal
 # and on looped healthy recordings -> out/false_alarms.md
 FALSE_ALARM_HOURS ?= 10
 false-alarms: setup
-	@$(VENV_PY) benchmarks/false_alarms.py --hours $(FALSE_ALARM_HOURS) --out out/false_alarms.md
+	@$(VENV_PY) benchmarks/false_alarms.py --hours $(FALSE_ALARM_HOURS) --out out/false_alarms.md --docs docs/results.md
 
 # early warning on the six FEMTO lives (against the textbook rule) and on healthy recordings -> out/trend.md
 trend: setup
-	@$(VENV_PY) benchmarks/trend_report.py --out out/trend.md
+	@$(VENV_PY) benchmarks/trend_report.py --out out/trend.md --docs docs/health.md
 
 # the whole graph at real time for SOAK_MINUTES (default 30) -> out/soak.md
 SOAK_MINUTES ?= 30
 soak: setup
-	@$(VENV_PY) benchmarks/soak.py --minutes $(SOAK_MINUTES) --out out/soak.md
+	@$(VENV_PY) benchmarks/soak.py --minutes $(SOAK_MINUTES) --out out/soak.md --docs docs/robustness.md
 
 # Ctrl-C to the starved `ros2 launch` of the monitoring graph, STOPS times (default 20): 0 stalls expected
 STOPS ?= 20

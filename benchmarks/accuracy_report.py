@@ -29,6 +29,7 @@ sys.path.insert(0, str(ROOT))  # `benchmarks` as a package
 from bearing_common.states import FaultState  # noqa: E402
 from bearing_diagnoser.accuracy import evaluate, load_manifest, markdown, run, totals  # noqa: E402
 from benchmarks import detection_curves  # noqa: E402
+from benchmarks.doc_tables import add_docs_option, nested, write_block  # noqa: E402
 
 MANIFEST = ROOT / "benchmarks" / "shared_data.yaml"
 
@@ -102,6 +103,7 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, default=ROOT / "out" / "accuracy.md")
     p.add_argument("--figure", type=Path, default=ROOT / "out" / "detection_curves.png")
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes for the ablations and curves")
+    add_docs_option(p, "docs/results.md")
     args = p.parse_args(argv)
     root = os.environ.get("BEARING_DATA_DIR")
     records = load_manifest(MANIFEST, root=root)
@@ -124,6 +126,8 @@ def main(argv=None) -> int:
     text += ["", f"({len(records)} recordings, {time.monotonic() - start:.0f} s)"]
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("\n".join(text) + "\n")
+    if args.docs:
+        write_block(args.docs, "accuracy", nested("\n".join(text), 2), "make accuracy")
     print(f"accuracy: wrote {args.out}")
     return 0
 

@@ -50,6 +50,7 @@ from bearing_diagnoser.accuracy import load_manifest  # noqa: E402
 from bearing_diagnoser.front_ends import config_for  # noqa: E402
 from bearing_diagnoser.pipeline import MonitorPipeline  # noqa: E402
 from bearing_recordings.recording import MEASURED_RPM_TOLERANCE  # noqa: E402
+from benchmarks.doc_tables import add_docs_option, nested, write_block  # noqa: E402
 from benchmarks.evaluation import STEADY_RATE, STEADY_RPM, steady_run  # noqa: E402
 
 MANIFEST = ROOT / "benchmarks" / "shared_data.yaml"
@@ -166,6 +167,7 @@ def main(argv=None) -> int:
     p.add_argument("--real-hours", type=float, default=0.2, help="hours of each healthy recording, looped")
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     p.add_argument("--out", type=Path, default=ROOT / "out" / "false_alarms.md")
+    add_docs_option(p, "docs/results.md")
     args = p.parse_args(argv)
     missing = [e.path for e in load_manifest(MANIFEST) if e.truth == FaultState.NORMAL and not e.path.is_file()]
     if missing:
@@ -184,6 +186,8 @@ def main(argv=None) -> int:
     text += ["", f"({sum(r.cpu_s for r in results):.0f} s of CPU, {time.monotonic() - wall:.0f} s wall)"]
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("\n".join(text) + "\n")
+    if args.docs:
+        write_block(args.docs, "false-alarms", nested("\n".join(text), 2), "make false-alarms")
     print("\n".join(text))
     return 0
 

@@ -17,6 +17,7 @@ import time
 import traceback
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))  # `benchmarks` as a package
+from benchmarks.doc_tables import add_docs_option, write_block  # noqa: E402
 
 # Per-core figures: one BLAS thread (numpy would otherwise spread small solves over both
 # cores, and process CPU time would count them twice). Set before the benchmark modules
@@ -59,6 +60,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/bench.md"))
     parser.add_argument("--only", help="substring of the benchmark functions to run")
+    add_docs_option(parser, "docs/benchmarks.md")
     args = parser.parse_args(argv)
     host = machine()
     lines = ["| figure | value | unit | machine |", "|---|---|---|---|"]
@@ -91,6 +93,8 @@ def main(argv=None) -> int:
             print(f"[bench]   ({time.monotonic() - start:.1f} s)", flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("# Benchmarks\n\n" + "\n".join(lines) + "\n")
+    if args.docs and not args.only:  # a partial run is not the table
+        write_block(args.docs, "bench", "\n".join(lines), "make bench")
     print(f"[bench] wrote {args.out}")
     return 1 if failed else 0
 

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))  # `benchmarks` as a package
+from benchmarks.doc_tables import add_docs_option, nested, write_block  # noqa: E402
 
 MEMORY_GROWTH_TARGET_MB = 5.0
 FAULTS = ("outer_race", "inner_race")
@@ -280,6 +281,7 @@ def main(argv=None) -> int:
     parser.add_argument("--window", type=float, default=1.0,
                         help="seconds after an onset before a fault state must name the fault")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/soak.md"))
+    add_docs_option(parser, "docs/robustness.md")
     args = parser.parse_args(argv)
     if not 0 < args.fault_minutes < args.minutes:
         parser.error("--fault-minutes must be > 0 and < --minutes")
@@ -288,6 +290,8 @@ def main(argv=None) -> int:
     text = report(rows, ok, args, wall)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text)
+    if args.docs:
+        write_block(args.docs, "soak", nested(text, 1), "make soak")
     print(text)
     return 0 if ok else 1
 

@@ -12,9 +12,11 @@
 * The detector's false alarms on synthetic healthy indicators against its design (iid and
   AR(1), baselines estimated), as in ``tests/unit/test_health_trend.py`` but with more machines.
 
-Writes ``out/trend.md``; with ``--figure`` also regenerates ``docs/figures/health/trend_Bearing1_1.png``.
+Writes ``out/trend.md``; with ``--docs docs/health.md`` (``make trend``) also its three tables into
+that file's generated blocks (:mod:`benchmarks.doc_tables`); with ``--figure`` also regenerates
+``docs/figures/health/trend_Bearing1_1.png``.
 
-    .venv/bin/python benchmarks/trend_report.py [--out out/trend.md] [--figure]
+    .venv/bin/python benchmarks/trend_report.py [--out out/trend.md] [--docs docs/health.md] [--figure]
 """
 
 from __future__ import annotations
@@ -33,6 +35,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # `benchmarks` as a package
+from benchmarks.doc_tables import add_docs_option, write_block  # noqa: E402
+
 DATA = Path(os.environ.get("BEARING_DATA_DIR", ROOT.parent / "shared" / "data"))
 BEARINGS = ("Bearing1_1", "Bearing1_2", "Bearing2_1", "Bearing2_2", "Bearing3_1", "Bearing3_2")
 FIGURE = ROOT / "docs/figures/health/trend_Bearing1_1.png"
@@ -183,18 +188,23 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default=str(ROOT / "out" / "trend.md"))
     p.add_argument("--figure", action="store_true", help=f"regenerate {FIGURE.relative_to(ROOT)}")
+    add_docs_option(p, "docs/health.md")
     args = p.parse_args(argv)
     if not (DATA / "femto").is_dir():
         print(f"trend_report: no FEMTO data in {DATA / 'femto'} (set BEARING_DATA_DIR)", file=sys.stderr)
         return 2
     t0 = time.time()
     femto, extra = femto_table(args.figure)
+    femto += ["", "Aims: " + ", ".join(f"{k}: {v}/6" for k, v in extra["aims"].items())]
+    healthy, synthetic = healthy_table(extra["quarters"]), synthetic_table()
     lines = ["# Early warning over a machine's life (`make trend`)", "",
              "## The six FEMTO lives (`bearing-trend DIR --bearing femto`, defaults)", "", *femto, "",
-             "Aims: " + ", ".join(f"{k}: {v}/6" for k, v in extra["aims"].items()), "",
-             "## Healthy recordings played as snapshots", "", *healthy_table(extra["quarters"]), "",
+             "## Healthy recordings played as snapshots", "", *healthy, "",
              "## False onsets on synthetic healthy indicators (no relevance band; baselines of 30 estimated)", "",
-             *synthetic_table(), "", f"({time.time() - t0:.0f} s)"]
+             *synthetic, "", f"({time.time() - t0:.0f} s)"]
+    if args.docs:
+        for name, rows in (("trend-femto", femto), ("trend-healthy", healthy), ("trend-synthetic", synthetic)):
+            write_block(args.docs, name, "\n".join(rows), "make trend")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text("\n".join(lines) + "\n")
