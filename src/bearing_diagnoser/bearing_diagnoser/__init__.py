@@ -39,5 +39,10 @@ Around the decision:
 - :mod:`.diagnose_cli`         the ``bearing-diagnose`` command
 - :mod:`.accuracy`, :mod:`.accuracy_cli`  accuracy on labelled recordings (``bearing-accuracy``)
 - :mod:`.plots`                the figures of ``bearing-diagnose --plot``
+- :mod:`.reports`              what a person reads: the evidence in physical terms
+  (:mod:`~.reports.diagnosis_summary`), the terminal text (:mod:`~.reports.terminal_text`), the
+  HTML pages of ``--report`` (:mod:`~.reports.diagnosis_page`, :mod:`~.reports.trend_page`,
+  :mod:`~.reports.envelope_view`, :mod:`~.reports.html_page`)
+- :mod:`.health`               condition indicators, trend and early warning, ``bearing-trend``
 - :mod:`.synthetic`            test signals with known answers
 """
