@@ -1,5 +1,5 @@
 """`make bench` rows of discovery beyond one host: Fast DDS's simple discovery (multicast)
-against a discovery server, as the number of participants grows (README "Across machines").
+against a discovery server, as the number of participants grows (docs/fleet.md "Across machines").
 
 Four emulated hosts on one switch (``tests/ros/netns_hosts.LanHosts``: network namespaces,
 10.213.1.1-4/24); P participants (4 to 40, one rclpy context each, ``discovery_participants.py``)

@@ -1,4 +1,4 @@
-"""Regenerate the README's figures into docs/figures/ (run with .venv/bin/python after `make test`).
+"""Regenerate the documentation's figures into docs/figures/ (run with .venv/bin/python after `make test`).
 
 * ``or_ir_acceleration.png`` — the simulator's OR-IR case with the fault periods marked;
 * the thesis' Figs. 2.11-2.16 and 3.3-3.6 from the shipped sim_48k models

@@ -10,7 +10,7 @@ command line), installs with rosdep the system packages our package.xml files na
    state (``tools/rosdep_keys.py``), at the pins of ``requirements/base.txt``. Nothing of the
    project's ``.venv/`` takes part: not its Python, its ``.pth`` files nor its ament index.
 2. ``out/full-install/``: a copy of ``src/``, ``msgs/`` and ``ros_ws/src/`` (its links), built in a
-   fresh shell with the README's commands, ``source <ros2-env>`` then ``cd ros_ws && colcon build``.
+   fresh shell with docs/install.md's commands, ``source <ros2-env>`` then ``cd ros_ws && colcon build``.
 
 Each step is redone only when its inputs changed (stamps hold their hash): the ros2-cli sources,
 ``build.sh`` and its pins, the pins and keys of step 1's packages and this file (1); those and

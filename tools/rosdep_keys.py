@@ -37,7 +37,7 @@ SYSTEM_KEYS = {
 
 #: Imported at run time but not installable through rosdep on Jazzy's platform: import name ->
 #: (PyPI distribution, why). A package.xml that needs one says so in a comment naming the
-#: distribution; users install it with pip (README "With a full ROS 2 install").
+#: distribution; users install it with pip (docs/install.md "With a full ROS 2 install").
 PYPI_ONLY = {
     "numba": ("numba", "rosdep's python3-numba resolves on Debian and on Ubuntu 18.04/20.04 only, not on "
                        "24.04 (Jazzy); it also pulls llvmlite, pinned with it"),

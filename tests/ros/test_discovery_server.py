@@ -1,5 +1,5 @@
 """The monitoring graph over four hosts of one LAN that discover through Fast DDS discovery
-servers (README "Across machines": the choice for plants), emulated by network namespaces.
+servers (docs/fleet.md "Across machines": the choice for plants), emulated by network namespaces.
 
 Hosts H1-H4 hang on one switch (``netns_hosts.LanHosts``: a bridge, 10.213.1.1-4/24, no
 other interface, no route out, each host with its own /dev/shm). H1 runs discovery server 0

@@ -3,7 +3,7 @@
 stand-in for ``/opt/ros/jazzy`` (``tools/full_ros_install.py``: ``../shared/ros2-cli`` over the
 PyPI wheels, the system packages rosdep would install, nothing of the project's venv).
 
-Every command line here is one of the README's "With a full ROS 2 install", run in a fresh
+Every command line here is one of docs/install.md's "With a full ROS 2 install", run in a fresh
 bash that sourced the install and ``ros_ws/install/setup.bash``. Skipped, with the reason,
 where ``../shared/ros2-cli`` is absent. Stops are Ctrl-C as a terminal sends it: SIGINT to the
 launch's process group (launch then sends its own SIGINT to every node), several of them with

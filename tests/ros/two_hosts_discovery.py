@@ -1,4 +1,4 @@
-"""Discovery time across the emulated link (README, "Across machines"): with both observers
+"""Discovery time across the emulated link (docs/fleet.md, "Across machines"): with both observers
 running on host A, start a node on host B ``--starts`` times and time until it sees a node of
 host A, for each discovery mode of ``test_two_hosts.py`` (and, for comparison, on one host).
 

@@ -56,7 +56,7 @@ def test_fault_confidence_is_a_lower_bound_of_being_right(results):
     """On the race-fault and healthy records. The confidence is the posterior of the part given
     the hypotheses the combs stand for; two 48 kHz ball-fault records (122, 226) carry plain
     race-fault line families (BPFO lines in 122, a BPFI harmonic series in 226: any envelope
-    method sees them), which name a race late in the record: reported in the README, not here."""
+    method sees them), which name a race late in the record: reported in docs/results.md, not here."""
     rows = calibration([r for r in results if r.method == "model" and r.record.truth != FaultState.BALL],
                        faults=True)
     assert sum(n for _lo, _hi, n, _s in rows) > 400

@@ -15,7 +15,7 @@
   (MCAP), model files (JSON) and bearing files (YAML) — a one-line InputError (or the
   loader's own error type), never another exception.
 
-The number of cases each property ran is in its ``max_examples`` (summed in the README).
+The number of cases each property ran is in its ``max_examples`` (summed in docs/robustness.md).
 """
 
 from __future__ import annotations

@@ -40,7 +40,7 @@ def test_crossing_formula_with_known_parameters():
             count = np.count_nonzero((s[:-1] < u) & (s[1:] >= u))
             expected = p * (s.size - 1)
             # the Gaussian pair is an approximation for a running median: measured on 8e6 steps
-            # (README) 1.01-1.34 x for the EWMA chart, 0.70-1.13 x for the median chart over
+            # (docs/health.md) 1.01-1.34 x for the EWMA chart, 0.70-1.13 x for the median chart over
             # φ = 0-0.85 and p = 1e-3-1e-5; here 0.65-1.3 x, widened by 3·√expected
             slack = 3 * math.sqrt(expected)
             assert 0.65 * expected - slack <= count <= 1.3 * expected + slack, (phi, lam, count, expected)
@@ -95,7 +95,7 @@ def test_limits_grow_with_the_rarity_asked_for():
 def test_false_alarm_rate_on_healthy_data_is_at_most_the_design(phi):
     """Healthy indicators (iid and autocorrelated), 30-snapshot baselines estimated from the data:
     false onsets per day are at most the design rate (3 standard errors), and the bound is not
-    vacuous (at least a quarter of it; measured 0.5-0.65 x for φ = 0-0.8, README). Limits from
+    vacuous (at least a quarter of it; measured 0.5-0.65 x for φ = 0-0.8, docs/health.md). Limits from
     the estimated φ̂ alone (no average over its error) gave 6.5 x the design at φ = 0.5 in
     development (EWMA chart alone): the test can fail."""
     rate = 10.0  # per day: 3.5e-3 per snapshot and chart, enough events in a short test

@@ -71,10 +71,10 @@ SETTINGS = {
 FILE_KEYS = ("layout", "motors_per_process", "parameters", "defaults", "motors", "fleet")
 NAMESPACE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
 ROLE_PROCESS = {"observer": "observers", "diagnoser": "diagnosers"}  # role layout: executable -> process name
-#: Role layout: at 48 kHz an observers process of 12 motors takes about 0.7 core (README "Fleet").
+#: Role layout: at 48 kHz an observers process of 12 motors takes about 0.7 core (docs/fleet.md).
 MOTORS_PER_PROCESS = 12
 #: Chunk (s) an external sensor publishes unless the fleet file says otherwise: a tenth of the
-#: messages of 0.01 s chunks for at most 0.1 s more latency (README "Fleet").
+#: messages of 0.01 s chunks for at most 0.1 s more latency (docs/fleet.md).
 EXTERNAL_CHUNK_S = 0.1
 #: Staleness timeouts are at least this many chunks (data arrives one chunk at a time).
 STALE_CHUNKS = 3

@@ -31,7 +31,7 @@ alarm begins only at such a crossing, so the expected number of false ones per d
 most crossings per step × steps per day × indicators (:func:`limit_for_rate`).
 
 How well this holds with a baseline of 30 snapshots is measured (``tests/unit/test_health_trend.py``,
-README "Health over a machine's life"): exact when φ is known; with φ estimated, conservative
+docs/health.md): exact when φ is known; with φ estimated, conservative
 for uncorrelated indicators and somewhat liberal for strongly correlated ones (φ = 0.8), the
 more so the deeper in the tail: 30 correlated values cannot pin down the long-run variance.
 """
