@@ -6,7 +6,7 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=[PACKAGE, f"{PACKAGE}.decision", f"{PACKAGE}.spectral", f"{PACKAGE}.fold",
-              f"{PACKAGE}.health"],
+              f"{PACKAGE}.health", f"{PACKAGE}.reports"],
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
         ("share/" + PACKAGE, ["package.xml"]),
