@@ -22,6 +22,7 @@ take a second channel, such as a tachometer's, from the same file.
 
 from __future__ import annotations
 
+import io
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -95,7 +96,7 @@ class Table:
 
 
 def _cells(line: str, delimiter: str | None) -> list[str]:
-    return [c.strip().strip('"').strip("'").strip() for c in line.split(delimiter)]
+    return [c.strip().strip('"').strip() for c in line.split(delimiter)]
 
 
 def _is_number(cell: str) -> bool:
@@ -113,50 +114,70 @@ def _delimiter(line: str) -> str | None:
     return None
 
 
-def _first_bad_row(body: list[str], numbers: list[int], delimiter: str | None) -> str:
-    """Why numpy could not read ``body`` (its rows, at file lines ``numbers``): the first row that differs."""
-    width = len(body[0].split(delimiter))
-    for row, line in zip(numbers, body):
-        cells = line.split(delimiter)
+def _content_lines(text: str, start: int = 0):
+    """(line number from 1, offset of the line's end, line) of each line of ``text`` from offset
+    ``start`` on that is neither blank nor a comment, lazily: the caller takes the first few only."""
+    number = text.count("\n", 0, start)
+    while start < len(text):
+        stop = text.find("\n", start)
+        stop = len(text) if stop < 0 else stop
+        number += 1
+        line = text[start:stop]
+        if line.strip() and not line.lstrip().startswith("#"):
+            yield number, stop, line
+        start = stop + 1
+
+
+def _first_bad_row(text: str, start: int, delimiter: str | None) -> str:
+    """Why numpy could not read the rows of ``text`` from offset ``start``: the first row that differs
+    (run only when reading failed)."""
+    width = None
+    for number, _end, line in _content_lines(text, start):
+        cells = line.replace('"', "").split(delimiter)
+        width = len(cells) if width is None else width
         if len(cells) != width:
-            return f"line {row} has {len(cells)} cells, the first row {width}"
+            return f"line {number} has {len(cells)} cells, the first row {width}"
         for cell in cells:
             if not _is_number(cell):
-                return f"line {row}: {cell.strip()!r} is not a number"
+                return f"line {number}: {cell.strip()!r} is not a number"
     return "not a table of numbers"
 
 
 def read_table(path) -> Table:
-    """The table in ``path`` (module docstring); InputError with the reason when it is not one."""
+    """The table in ``path`` (module docstring); InputError with the reason when it is not one.
+
+    The rows are parsed by numpy's reader in one call (no Python loop over them); the header
+    and the separator are found from the first lines."""
     try:
         text = Path(path).read_text(encoding="utf-8-sig")
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a text file (CSV/TSV expected)") from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.__class__.__name__}: {exc})") from None
-    lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and
-             not line.lstrip().startswith("#")]
-    if not lines:
-        raise InputError(f"{path}: no rows (an empty table)")
-    first = lines[0][1]
-    header = None
-    if not all(_is_number(c) for c in _cells(first, _delimiter(first))):
-        header = first
-        lines = lines[1:]
-        if not lines:
-            raise InputError(f"{path}: a header ({', '.join(_cells(first, _delimiter(first)))}) and no rows of "
-                             "numbers")
-    if len(lines) > MAX_SAMPLES:
-        raise InputError(f"{path}: {len(lines)} rows is more than the {MAX_SAMPLES} this tool reads at once; "
+    rows = text.count("\n") + 1
+    if rows > MAX_SAMPLES:
+        raise InputError(f"{path}: {rows} rows is more than the {MAX_SAMPLES} this tool reads at once; "
                          "split the recording")
-    delimiter = _delimiter(lines[0][1])
-    body = [line.replace('"', "").replace("'", "") for _, line in lines]
+    found = _content_lines(text)
+    first = next(found, None)
+    if first is None:
+        raise InputError(f"{path}: no rows (an empty table)")
+    header, body_start = None, 0
+    if not all(_is_number(c) for c in _cells(first[2], _delimiter(first[2]))):
+        header, body_start = first[2], first[1] + 1
+        first = next(found, None)
+        if first is None:
+            raise InputError(f"{path}: a header ({', '.join(_cells(header, _delimiter(header)))}) and no rows of "
+                             "numbers")
+    delimiter = _delimiter(first[2])
+    body = text[body_start:]
     if delimiter == ";":
-        body = [line.replace(",", ".") for line in body]  # decimal commas
+        body = body.replace(",", ".")  # decimal commas
     try:
-        data = np.loadtxt(body, delimiter=delimiter, ndmin=2, dtype=float, comments=None)
+        data = np.loadtxt(io.StringIO(body), delimiter=delimiter, ndmin=2, dtype=float, comments="#",
+                          quotechar='"')
     except ValueError:
-        raise InputError(f"{path}: {_first_bad_row(body, [n for n, _ in lines], delimiter)}") from None
+        raise InputError(f"{path}: {_first_bad_row(text[:body_start] + body, body_start, delimiter)}") from None
     if header is None:
         names = [str(k + 1) for k in range(data.shape[1])]
     elif delimiter is None and data.shape[1] == 1:  # one column: the whole line names it, spaces and all
