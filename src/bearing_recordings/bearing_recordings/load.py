@@ -1,4 +1,4 @@
-"""Load any supported recording by its kind: rosbag2 directory, ``.npz`` (bearing-sim) or ``.mat``."""
+"""Load any supported recording by its kind: rosbag2 directory, ``.npz`` (real or simulated) or ``.mat``."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from .recording import InputError, Recording, check_rate, check_rpm
 
 def load_recording(path, sample_rate: float | None = None, rpm: float | None = None,
                    channel: str | None = None, units: str | None = None) -> Recording:
-    """Load ``path``: directory → rosbag2, ``.npz`` → simulator output, ``.mat`` → MFPT/CWRU/one signal.
+    """Load ``path``: directory → rosbag2, ``.npz`` (:mod:`.npz_files`), ``.mat`` → MFPT/CWRU/one signal.
 
     ``sample_rate`` (Hz) overrides the file's (required where the file has none);
     ``rpm`` overrides the file's speed; ``channel`` picks the signal (see
