@@ -5,6 +5,8 @@ analysis would read as a healthy bearing (a flat line has no impacts) or as a fa
 clipped or square-wave signal is all "impacts"). Such windows are reported as a sensor
 problem and not diagnosed. The checks are scale-free (no units needed):
 
+* **non-finite** — any sample NaN or infinite (an acquisition that marks dropouts or
+  overflows so; no spectrum is defined);
 * **flat** — the window's standard deviation is zero, or below 1e-9 of its mean level
   (a stuck or disconnected channel, an ADC holding one code);
 * **quantised** — fewer than :data:`MIN_LEVELS` distinct values: with 16 levels the
@@ -12,6 +14,9 @@ problem and not diagnosed. The checks are scale-free (no units needed):
 * **clipped** — more than :data:`MAX_CLIPPED` of the samples sit exactly at the window's
   maximum or minimum (a real signal touches its extreme once; a saturated amplifier sits
   there for runs of samples; a rail-to-rail square wave almost always).
+
+:class:`SensorWatch` keeps a measurement's recent samples for a front end that decides from
+reduced blocks (the fold), so that its windows get the same check.
 """
 
 from __future__ import annotations
@@ -19,6 +24,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from bearing_common.chunk_stream import StreamCursor
+from bearing_common.indexed_buffer import IndexedBuffer
 
 #: Fewest distinct sample values a diagnosable window holds.
 MIN_LEVELS = 16
@@ -46,6 +54,10 @@ def check_window(x: np.ndarray) -> SensorCheck:
     x = np.asarray(x, dtype=float)
     if x.size == 0:
         return SensorCheck("no samples", 0.0, 0, 0.0)
+    bad = ~np.isfinite(x)
+    if bad.any():
+        return SensorCheck(f"{int(bad.sum())} of {x.size} samples not finite (NaN or infinite): acquisition fault",
+                           float("nan"), 0, 0.0)
     mean = float(np.mean(x))
     std = float(np.std(x))
     rms = float(np.sqrt(mean * mean + std * std))
@@ -65,3 +77,36 @@ def check_window(x: np.ndarray) -> SensorCheck:
     else:
         problem = ""
     return SensorCheck(problem, rms, levels, clipped)
+
+
+class SensorWatch:
+    """The recent samples of one measurement, by stream index, to check the windows decided on it.
+
+    Every observer stream carries the same measurement y = r + ŷ: the first stream to bring a
+    sample wins, a later copy of it is skipped. A start or a gap begins afresh (a window that
+    reaches before it can no longer be checked).
+    """
+
+    def __init__(self):
+        self._samples = IndexedBuffer()
+        self._cursor = StreamCursor()
+
+    def push(self, first_index: int, y: np.ndarray) -> None:
+        """Samples ``y`` from stream index ``first_index``."""
+        offset = self._cursor.offset(first_index)
+        if offset is None or offset > 0:
+            self._samples.clear(first=first_index)
+        elif offset < 0:  # seen already, in part or whole
+            y, first_index = y[-offset:], first_index - offset
+        if y.size:
+            self._samples.append(y)
+            self._cursor.advance(first_index, y.size)
+
+    def check(self, i0: int, i1: int) -> SensorCheck | None:
+        """:func:`check_window` of samples [i0, i1); None when they are not all held."""
+        x = self._samples.view(i0, i1)
+        return None if x is None else check_window(x[0])
+
+    def trim(self, keep_from: int) -> None:
+        """Forget the samples before index ``keep_from``."""
+        self._samples.trim(keep_from)
