@@ -21,6 +21,7 @@ reduced blocks (the fold), so that its windows get the same check.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,18 +53,20 @@ class SensorCheck:
 def check_window(x: np.ndarray) -> SensorCheck:
     """Check one window of raw samples (any unit) for a sensor problem."""
     x = np.asarray(x, dtype=float)
-    if x.size == 0:
+    n = x.size
+    if n == 0:
         return SensorCheck("no samples", 0.0, 0, 0.0)
-    bad = ~np.isfinite(x)
-    if bad.any():
-        return SensorCheck(f"{int(bad.sum())} of {x.size} samples not finite (NaN or infinite): acquisition fault",
-                           float("nan"), 0, 0.0)
+    s = np.sort(x)  # one sort gives the extremes, their counts and the levels (NaN sorts last, -inf first)
+    lo, hi = float(s[0]), float(s[-1])
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        bad = int(np.count_nonzero(~np.isfinite(s)))
+        return SensorCheck(f"{bad} of {n} samples not finite (NaN or infinite): acquisition fault", math.nan, 0, 0.0)
     mean = float(np.mean(x))
     std = float(np.std(x))
     rms = float(np.sqrt(mean * mean + std * std))
-    levels = int(np.unique(x).size)
-    hi, lo = float(np.max(x)), float(np.min(x))
-    clipped = float(np.count_nonzero((x == hi) | (x == lo)) / x.size)
+    levels = 1 + int(np.count_nonzero(s[1:] != s[:-1]))
+    at_rails = int(np.searchsorted(s, lo, "right")) + n - int(np.searchsorted(s, hi, "left"))
+    clipped = float((at_rails - (n if hi == lo else 0)) / n)
     if std == 0.0 or std < 1e-9 * abs(mean):
         problem = f"flat signal (standard deviation {std:.3g}, level {mean:.3g}): sensor dead or disconnected"
     elif clipped >= 0.5:
