@@ -1,7 +1,8 @@
 """Every window decision on the thesis cases and the development recordings, to check that a change keeps them.
 
 ``python -m benchmarks.decision_dump dump OUT.pkl [SIM_DIR]`` writes, per run, each window's
-(window end, label, published state, confidence, onset, changed, detail, scores) and the
+(window end, label, published state, confidence, onset, changed, why it was not diagnosed
+("kind: reason") or else its detail, scores) and the
 JSON lines ``bearing-diagnose`` prints: the
 thesis' eight cases from the simulator (48 kHz noise-free, with sensor noise, at 1500 rpm,
 and 12 kHz with noise) and every recording of ``shared_data.yaml``, each with the model
@@ -37,7 +38,7 @@ METHODS = ("model", "envelope")
 
 def _windows(result) -> list[tuple]:
     return [(round(d.window_end, 9), d.label.name, d.state.name, d.confidence, d.onset, d.changed,
-             f"sensor: {d.sensor_problem}" if d.sensor_problem else d.detail, d.scores.as_dict())
+             str(d.not_diagnosed) if d.not_diagnosed else d.detail, d.scores.as_dict())
             for d in result.decisions]
 
 

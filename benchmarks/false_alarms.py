@@ -114,7 +114,7 @@ def run_stream(args) -> StreamResult:
         for d in pipeline.decisions:
             windows += 1
             if not d.diagnosed:
-                not_diagnosed[(d.sensor_problem or d.speed_problem).split(":")[0]] += 1
+                not_diagnosed[d.not_diagnosed.kind] += 1
                 continue
             alarm_windows += d.state != FaultState.NORMAL
             alarms += d.state != FaultState.NORMAL and previous == FaultState.NORMAL

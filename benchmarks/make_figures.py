@@ -236,7 +236,7 @@ def main() -> int:
     or_ir_figure(run, OUT / "or_ir_acceleration.png")
     with tempfile.TemporaryDirectory() as tmp:
         npz = pathlib.Path(tmp) / "or_ir.npz"
-        np.savez(npz, **run)
+        np.savez(npz, **run, source="simulator")  # as bearing-sim writes it: read as the simulator's
         make_figures(OUT / "observer", "sim_48k", data=run)
         diagnose_figures(npz, OUT / "diagnosis")
     real_machine_figures(OUT / "real")

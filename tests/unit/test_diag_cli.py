@@ -17,11 +17,12 @@ KEYS = {"start", "end", "state", "confidence", "detected_at", "scores", "model_s
 
 
 def write_npz(path, accel, fs=FS, rpm=1800.0, **extra):
-    """A bearing-sim-style npz; a bad ``fs`` (e.g. 0) is written as given, ``t`` then
-    counts samples."""
+    """A bearing-sim npz (``source`` = simulator unless ``extra`` says otherwise); a bad ``fs``
+    (e.g. 0) is written as given, ``t`` then counts samples."""
     t = np.arange(np.size(accel)) / (fs if fs > 0 else 1.0)
-    np.savez(path, t=t, accel=accel, unbalance=np.zeros(np.size(accel)),
-             truth=np.zeros(np.size(accel), int), sample_rate=fs, rpm=rpm, **extra)
+    np.savez(path, **({"t": t, "accel": accel, "unbalance": np.zeros(np.size(accel)),
+                       "truth": np.zeros(np.size(accel), int), "sample_rate": fs, "rpm": rpm,
+                       "source": "simulator"} | extra))
     return path
 
 

@@ -11,6 +11,7 @@ import pytest
 
 from bearing_common.bearings import CATALOG
 from bearing_common.states import FaultState
+from bearing_diagnoser.decision.not_diagnosed import NotDiagnosed
 from bearing_diagnoser.decision.scores import WindowScores
 from bearing_diagnoser.diagnoser_node_config import LEVEL_ERROR, LEVEL_OK, LEVEL_STALE, PARAMETERS
 from bearing_diagnoser.diagnoser_session import DiagnoserSession
@@ -135,10 +136,14 @@ def test_a_short_snapshot_tests_what_its_resolution_separates():
     reports, records = feed_snapshots(s, 3, 0.1)
     assert not reports  # not diagnosed: nothing tested
     d = s.history[-1]
-    assert not d.diagnosed and "0.1 s snapshot resolves 10 Hz, too coarse at 1800 rpm" in d.resolution_problem
-    assert "not diagnosed: a 0.1 s snapshot" in records[-1].evidence.problem and not records[-1].evidence.significance
+    assert not d.diagnosed and d.not_diagnosed.kind == "resolution"
+    assert "0.1 s snapshot resolves 10 Hz, too coarse at 1800 rpm" in d.not_diagnosed.reason
+    assert "not diagnosed: resolution: a 0.1 s snapshot" in records[-1].evidence.problem
+    assert not records[-1].evidence.significance
+    assert records[-1].to_json()["evidence"]["not_diagnosed"] == d.not_diagnosed.to_json()  # bearing-trend's line
     health = s.health(120.5)
-    assert health.level != LEVEL_STALE and "not diagnosed" in health.message
+    assert health.level != LEVEL_STALE and "not diagnosed: resolution: a 0.1 s snapshot" in health.message
+    assert health.values["not diagnosed"] == "resolution"
     assert "ball: sidebands" in health.values["untested"]
 
 
@@ -197,9 +202,10 @@ def test_a_records_evidence_is_the_last_decided_window_inside_it():
     h.decided([DecidedWindow(0.4, scores[0]), DecidedWindow(0.9, scores[1]), DecidedWindow(1.2, scores[2])])
     (rec,) = h.push(0.0, FS, white_noise(1.0, FS, 4e-3), False, 0.0)
     assert rec.evidence.significance == {"outer_race": 2.0}  # ends inside [0, 1]; 1.2 waits for the next
-    h.decided([DecidedWindow(1.5, scores[0], problem="shaft speed not confirmed")])
+    h.decided([DecidedWindow(1.5, scores[0], NotDiagnosed("speed", "shaft speed not confirmed"))])
     (rec,) = h.push(1.0, FS, white_noise(1.0, FS, 4e-3), False, 0.0)
-    assert rec.evidence.problem == "not diagnosed: shaft speed not confirmed"
+    assert rec.evidence.problem == "not diagnosed: speed: shaft speed not confirmed"
+    assert rec.evidence.not_diagnosed == NotDiagnosed("speed", "shaft speed not confirmed")
     (rec,) = h.push(2.0, FS, white_noise(1.0, FS, 4e-3), False, 0.0, no_evidence="shaft speed unknown")
     assert rec.evidence.problem == "shaft speed unknown"
 

@@ -183,7 +183,8 @@ def test_sensor_problems_are_not_diagnosed():
     out = []
     for i in range(0, y.size, 2000):
         out += dg.update(O, i, FS, y[i:i + 2000], None, None, F.bpfo)
-    assert out and all(d.sensor_problem.startswith("flat signal") for d in out)
+    assert out and all(d.not_diagnosed.kind == "sensor" and d.not_diagnosed.reason.startswith("flat signal")
+                       for d in out)
     assert not any(d.changed for d in out)
 
 

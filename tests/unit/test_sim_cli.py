@@ -37,7 +37,8 @@ def test_cli_writes_contract_npz(tmp_path):
     rc = main(["--schedule", "normal:0.01,or:0.02", "--sample-rate", "12000", "--out", str(out)])
     assert rc == 0
     d = np.load(out)
-    assert set(d.files) == {"t", "accel", "unbalance", "sample_rate", "rpm", "truth"}
+    assert set(d.files) == {"t", "accel", "unbalance", "sample_rate", "rpm", "truth", "source"}
+    assert d["source"].item() == "simulator"  # else a .npz is read as a real machine's
     assert float(d["sample_rate"]) == 12000.0 and float(d["rpm"]) == 1800.0
     assert len(d["t"]) == len(d["accel"]) == len(d["unbalance"]) == len(d["truth"]) == 360
     np.testing.assert_allclose(d["t"][:3], [0.0, 1 / 12000, 2 / 12000])

@@ -12,6 +12,7 @@ The decision, by where to look (no rclpy anywhere except ``node``):
   :mod:`~.decision.thesis_blocks` (the thesis' own blocks: model explains, cross-correlation),
   :mod:`~.decision.scores` (what a window shows, typed),
   :mod:`~.decision.sensor_health` (is the signal fit to diagnose),
+  :mod:`~.decision.not_diagnosed` (why a window was not diagnosed: one kind, one reason),
   :mod:`~.decision.state_tracker` (hysteresis, onsets, confidence),
   :mod:`~.decision.segments` (runs of one state, what ``bearing-diagnose`` prints),
   :mod:`~.decision.pairwise_sum` (NumPy's summation in compiled loops)

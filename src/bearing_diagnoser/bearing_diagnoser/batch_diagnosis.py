@@ -128,8 +128,8 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
             log.removeHandler(notes)
             log.setLevel(level)
     for start, end, problem in res.not_diagnosed[:1]:
-        notes.emit_note(f"warning: {len(res.not_diagnosed)} windows not diagnosed, first at {start:.3f}-{end:.3f} s: "
-                        f"{problem}")
+        notes.emit_note(f"warning: {len(res.not_diagnosed)} of {len(res.decisions)} windows not diagnosed, first at "
+                        f"{start:.3f}-{end:.3f} s: {problem}")
     report.lines = [seg.to_json() for seg in res.segments]
     report.summary = summarise(res, rec, res.bearing)
     if plot_dir is not None:

@@ -4,19 +4,32 @@
                      [--channel NAME] [--bearing NAME|FILE.yaml] [--units g|m/s2 | --sensitivity S]
                      [--model-set NAME] [--method model|envelope] [--plot DIR] [--report DIR] [--json]
 
-PATH is a ``bearing-sim`` .npz, a MATLAB recording (CWRU, MFPT, or one signal such as
-HIT-SM; see ``bearing_recordings.mat_files``), a CSV/TSV table or a WAV file
-(``bearing_recordings.table_files``, ``wav_files``), a rosbag2 directory, or a folder of any
-of these (walked: ``bearing_recordings.recording_files``). Stdout: one JSON object per line
-(``shared/CONTRACT.md``) when it is not a terminal or with ``--json``, else the verdict and
-its evidence in words (:mod:`.reports.terminal_text`); with several paths or a folder, each
-JSON line also carries ``"file"``, in the order of the files whatever ``--jobs`` runs in
-parallel. ``--report DIR`` writes one HTML page per file (:mod:`.reports.diagnosis_page`).
-Stderr: the model set, bearing,
-any resampling, the speed, sensor problems (each file's prefixed with it in a batch), and per
-file that cannot be diagnosed one ``error:`` line. The options apply to every file as
-they would to it alone, so a file's lines in a batch are those of its own run. Exit status 0, or 2 when any file was bad
-input, 1 when any failed otherwise.
+PATH is a .npz (a real machine's recording unless its ``source`` says ``simulator``, as
+``bearing-sim`` writes: ``bearing_recordings.npz_files``), a MATLAB recording (CWRU, MFPT, or
+one signal such as HIT-SM; see ``bearing_recordings.mat_files``), a CSV/TSV table or a WAV file
+(``bearing_recordings.table_files``, ``wav_files``), a rosbag2 directory, or a folder of any of
+these (walked: ``bearing_recordings.recording_files``). Stdout: one JSON object per line
+(``shared/CONTRACT.md``) when it is not a terminal or with ``--json``, else the verdict and its
+evidence in words (:mod:`.reports.terminal_text`); with several paths or a folder, each JSON
+line also carries ``"file"``, in the order of the files whatever ``--jobs`` runs in parallel.
+``--report DIR`` writes one HTML page per file (:mod:`.reports.diagnosis_page`). Stderr: the
+model set, bearing, any resampling, the speed, the windows not diagnosed (each file's prefixed
+with it in a batch), and per file that cannot be diagnosed one ``error:`` line. The options
+apply to every file as they would to it alone, so a file's lines in a batch are those of its
+own run.
+
+Every readable recording gets a verdict. A window the decision cannot diagnose (the sensor
+signal dead, clipped, quantised; the shaft speed not confirmed; a snapshot too short to
+resolve any fault line) takes no part in the segments; when no window of a recording could
+be diagnosed, its one segment covers it all with ``"state": "unknown"``, ``"confidence": 0``
+and ``"not_diagnosed": {"kind": "sensor"|"speed"|"resolution", "reason": "..."}`` (the most
+frequent kind, with its first reason), and the exit status is 0. A segment that was
+diagnosed carries no ``not_diagnosed``.
+
+Exit status 0; 2 when any file was bad input: what cannot be read (no such file, not a
+recording, a channel or sample rate missing, non-finite samples) or cannot be analysed
+whatever it holds (a sample rate too low for the bearing's fault lines, a record shorter than
+one analysis window, an unknown bearing or model set); 1 when any failed otherwise.
 """
 
 from __future__ import annotations
@@ -36,8 +49,8 @@ def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``bearing-diagnose``."""
     p = argparse.ArgumentParser(prog=PROG, description="Diagnose bearing vibration recordings offline.")
     p.add_argument("paths", nargs="+", metavar="PATH",
-                   help="bearing-sim .npz, MATLAB .mat (CWRU, MFPT, one signal), CSV/TSV table, WAV file, rosbag2 "
-                        "directory, or a folder of these (walked)")
+                   help=".npz (bearing-sim's or a real machine's), MATLAB .mat (CWRU, MFPT, one signal), CSV/TSV "
+                        "table, WAV file, rosbag2 directory, or a folder of these (walked)")
     p.add_argument("--jobs", "-j", type=_jobs, default=1, metavar="N",
                    help="diagnose N files at a time in worker processes (default 1; 0: one per available core)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,

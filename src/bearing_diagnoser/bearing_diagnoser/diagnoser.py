@@ -165,10 +165,10 @@ class Diagnoser:
         tr = self._tracker
         out = []
         for v in verdicts:
-            diagnosed = not (v.sensor_problem or v.speed_problem or v.resolution_problem)
-            changed = diagnosed and tr.update(v.label, v.confidence, v.start, v.end, v.posterior, v.evidence_since)
+            changed = v.not_diagnosed is None and tr.update(v.label, v.confidence, v.start, v.end, v.posterior,
+                                                            v.evidence_since)
             out.append(Decision(v.end, v.start, v.end, v.label, tr.state, tr.confidence, tr.onset, changed, v.scores,
-                                v.detail, v.sensor_problem, v.speed_problem, v.resolution_problem))
+                                v.detail, v.not_diagnosed))
         if self.keep_history:
             self.history.extend(out)
         return out

@@ -47,6 +47,7 @@ from bearing_common.model_set_info import SHIPPED_SETS
 from bearing_common.states import FaultState
 
 from .decision.config import DiagnoserConfig
+from .decision.not_diagnosed import NotDiagnosed
 from .decision.scores import WindowScores
 from .decision.state_tracker import Decision
 from .diagnoser import STREAMS, Diagnoser
@@ -153,9 +154,7 @@ class DiagnoserSession:
         self.last_heard = {h: None for h in STREAMS}
         self.shaft_rpm: float | None = None
         self.last_report: StateReport | None = None
-        self.sensor_problem = ""
-        self.speed_problem = ""
-        self.resolution_problem = ""  # the last window too short a snapshot to test any hypothesis
+        self.not_diagnosed: NotDiagnosed | None = None  # why the last window was not diagnosed (sensor, speed, ...)
         self.untested: dict = {}  # {hypothesis: why} the last window could not test
         self.speed_warning = ""  # the last window's measured speed disagreed with the told one
         self.decision_problem = ""  # why the last chunk could not be decided on (cleared by a good one)
@@ -313,7 +312,8 @@ class DiagnoserSession:
     def _feed_condition(self, stamp: float, sample_rate: float, y: np.ndarray, verdict,
                         decisions: list[Decision]) -> None:
         """The measurement to the condition trend, with the windows just decided."""
-        self.condition.decided([DecidedWindow(self.time_offset + d.window_end, d.scores, d.problem) for d in decisions])
+        self.condition.decided([DecidedWindow(self.time_offset + d.window_end, d.scores, d.not_diagnosed)
+                                for d in decisions])
         rpm = self.shaft_rpm or (float(self.values["rpm"]) or None)
         no_evidence = self.decision_problem and f"cannot decide: {self.decision_problem}"
         if not no_evidence and self.speed_unknown:
@@ -344,9 +344,8 @@ class DiagnoserSession:
         return [self._report(d) for d in decisions if self._account(d)]
 
     def _account(self, d: Decision) -> bool:
-        """Remember a window's sensor verdict; True when its state is to be published."""
-        self.sensor_problem, self.speed_problem = d.sensor_problem, d.speed_problem
-        self.resolution_problem, self.untested = d.resolution_problem, d.scores.untested
+        """Remember why a window was not diagnosed, if it was not; True when its state is to be published."""
+        self.not_diagnosed, self.untested = d.not_diagnosed, d.scores.untested
         self.speed_warning = d.scores.speed_warning()
         if self.speed_warning:
             self._log_repeatable("speed disagrees", "warning", self.speed_warning)
@@ -391,13 +390,9 @@ class DiagnoserSession:
         level, message = STATE_LEVEL[state], state.name
         if self.decision_problem:
             level, message = max(level, LEVEL_WARN), f"cannot decide: {self.decision_problem}"
-        elif self.sensor_problem:
-            level, message = max(level, LEVEL_WARN), f"sensor problem: {self.sensor_problem}"
-            values["sensor"] = self.sensor_problem
-        elif self.speed_problem:
-            level, message = max(level, LEVEL_WARN), f"not diagnosed: {self.speed_problem}"
-        elif self.resolution_problem:
-            level, message = max(level, LEVEL_WARN), f"not diagnosed: {self.resolution_problem}"
+        elif self.not_diagnosed is not None:
+            level, message = max(level, LEVEL_WARN), f"not diagnosed: {self.not_diagnosed}"
+            values["not diagnosed"] = self.not_diagnosed.kind
         elif self.speed_unknown:
             level, message = max(level, LEVEL_WARN), f"{message} ({SPEED_UNKNOWN})"
         elif self.speed_warning:

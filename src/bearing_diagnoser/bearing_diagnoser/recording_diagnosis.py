@@ -52,7 +52,7 @@ class OfflineResult:
     streams: dict = field(default_factory=dict)  # hypothesis label -> dict of arrays (for plots)
     cpu_s: float = 0.0
     method: str = "model"
-    not_diagnosed: list = field(default_factory=list)  # (start s, end s, why: a sensor or speed problem)
+    not_diagnosed: list = field(default_factory=list)  # (start s, end s, NotDiagnosed) of the windows not diagnosed
     bearing: Bearing | None = None  # the bearing diagnosed
 
 
@@ -123,9 +123,11 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     keep_streams : bool
         Keep full residual / estimate / train arrays for figures.
 
-    Raises InputError (one line) when the recording cannot be diagnosed: a sample rate too
-    low for the bearing's fault lines, a record shorter than one analysis window, a signal
-    that is a sensor problem throughout.
+    Raises InputError (one line) only when the recording cannot be analysed at all, whatever its
+    signal holds: an unknown method or model set, a sample rate too low for the bearing's fault
+    lines, a record shorter than one analysis window. A readable recording gets a verdict: where
+    no window could be diagnosed (a dead sensor, a speed never confirmed), its one segment says
+    so (:func:`.decision.segments.segments_from_decisions`).
     """
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; expected {' or '.join(METHODS)}")
@@ -150,11 +152,8 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     t_cpu = time.process_time()
     decisions = run_pipeline(pipeline, x, fs, rec.source, chunk_s)
     cpu = time.process_time() - t_cpu
-    problems = [(d.window_start, d.window_end, d.sensor_problem or d.speed_problem) for d in decisions
-                if not d.diagnosed]
+    problems = [(d.window_start, d.window_end, d.not_diagnosed) for d in decisions if not d.diagnosed]
     segs = segments_from_decisions(decisions, x.size / fs, ms)
-    if decisions and not segs:
-        raise InputError(f"no window could be diagnosed: {problems[0][2]}")
     return OfflineResult(segs, decisions, ms, fs, speed, x, truth, pipeline.kept_streams(), cpu, method, problems,
                          bearing)
 

@@ -1,4 +1,5 @@
-"""Load any supported recording by its kind: rosbag2 directory, ``.npz``, ``.mat``, CSV/TSV table or WAV."""
+"""Load any supported recording by its kind: rosbag2 directory, ``.npz`` (real or simulated), ``.mat``, CSV/TSV
+table or WAV."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from .wav_files import WAV_SUFFIXES, load_wav
 def load_recording(path, sample_rate: float | None = None, rpm: float | None = None,
                    channel: str | None = None, units: str | None = None,
                    sensitivity: str | None = None) -> Recording:
-    """Load ``path``: directory → rosbag2, ``.npz`` → simulator output or a recording, ``.mat`` →
+    """Load ``path``: directory → rosbag2, ``.npz`` (:mod:`.npz_files`), ``.mat`` →
     MFPT/CWRU/one signal, ``.csv``/``.tsv``/``.txt`` → a table (a FEMTO ``acc_*.csv`` snapshot as
     such), ``.wav`` → WAV.
 

@@ -5,7 +5,8 @@
 
 The .npz holds ``t`` (s), ``accel`` (drive-end housing y acceleration, m/s^2),
 ``unbalance`` (physical unbalance force on the disk along +y, N), ``sample_rate``
-(Hz), ``rpm`` and ``truth`` (per-sample FaultState integers). Bad arguments
+(Hz), ``rpm``, ``truth`` (per-sample FaultState integers) and ``source`` = ``simulator``
+(without it a .npz is read as a real machine's recording). Bad arguments
 give one error line on stderr and exit status 2; a simulation failure exit 1.
 """
 
@@ -107,7 +108,8 @@ def main(argv=None):
                  unbalance=np.concatenate([c.unbalance for c in parts]),
                  sample_rate=np.float64(sim.sample_rate),
                  rpm=np.float64(cfg.rpm),
-                 truth=np.concatenate([c.truth for c in parts]))
+                 truth=np.concatenate([c.truth for c in parts]),
+                 source=np.str_("simulator"))
     except OSError as exc:
         print(f"bearing-sim: error: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
         return 2

@@ -16,6 +16,7 @@ from typing import Protocol
 
 from bearing_common.states import FaultState
 
+from .not_diagnosed import NotDiagnosed
 from .scores import WindowScores
 from .stream_blocks import StreamBlocks
 
@@ -26,11 +27,10 @@ class WindowVerdict:
 
     ``posterior``: {state: probability} when the front end has one (the tracker then reports
     the mean posterior of the published state as its confidence); ``detail``: what was special
-    about the window (a missing stream); ``sensor_problem``, ``speed_problem``,
-    ``resolution_problem``: why the window was not diagnosed at all (the sensor signal unusable;
-    the shaft speed not known well enough to tell the parts apart; a snapshot too short to
-    resolve any hypothesis' lines; "" when it was); ``evidence_since``: when the evidence for the label began (s), when
-    the front end knows it better than the window (accumulated evidence).
+    about the window (a missing stream); ``not_diagnosed``: why the window was not diagnosed at
+    all (:mod:`.not_diagnosed`: the sensor, the speed or the resolution; None when it was);
+    ``evidence_since``: when the evidence for the label began (s), when the front end knows it
+    better than the window (accumulated evidence).
     """
 
     start: float
@@ -40,10 +40,13 @@ class WindowVerdict:
     scores: WindowScores
     posterior: dict | None = None
     detail: str = ""
-    sensor_problem: str = ""
-    speed_problem: str = ""
+    not_diagnosed: NotDiagnosed | None = None
     evidence_since: float | None = None
-    resolution_problem: str = ""
+
+    @classmethod
+    def undiagnosed(cls, start: float, end: float, scores: WindowScores, kind: str, reason: str) -> WindowVerdict:
+        """A window not diagnosed, for a reason of ``kind`` (:data:`.not_diagnosed.KINDS`): UNKNOWN, confidence 0."""
+        return cls(start, end, FaultState.UNKNOWN, 0.0, scores, not_diagnosed=NotDiagnosed(kind, reason))
 
 
 class FrontEnd(Protocol):

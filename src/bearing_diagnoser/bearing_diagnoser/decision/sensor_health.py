@@ -5,6 +5,8 @@ analysis would read as a healthy bearing (a flat line has no impacts) or as a fa
 clipped or square-wave signal is all "impacts"). Such windows are reported as a sensor
 problem and not diagnosed. The checks are scale-free (no units needed):
 
+* **non-finite** — any sample NaN or infinite (an acquisition that marks dropouts or
+  overflows so; no spectrum is defined);
 * **flat** — the window's standard deviation is zero, or below 1e-9 of its mean level
   (a stuck or disconnected channel, an ADC holding one code);
 * **quantised** — fewer than :data:`MIN_LEVELS` distinct values: with 16 levels the
@@ -12,13 +14,20 @@ problem and not diagnosed. The checks are scale-free (no units needed):
 * **clipped** — more than :data:`MAX_CLIPPED` of the samples sit exactly at the window's
   maximum or minimum (a real signal touches its extreme once; a saturated amplifier sits
   there for runs of samples; a rail-to-rail square wave almost always).
+
+:class:`SensorWatch` keeps a measurement's recent samples for a front end that decides from
+reduced blocks (the fold), so that its windows get the same check.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from bearing_common.chunk_stream import StreamCursor
+from bearing_common.indexed_buffer import IndexedBuffer
 
 #: Fewest distinct sample values a diagnosable window holds.
 MIN_LEVELS = 16
@@ -44,14 +53,20 @@ class SensorCheck:
 def check_window(x: np.ndarray) -> SensorCheck:
     """Check one window of raw samples (any unit) for a sensor problem."""
     x = np.asarray(x, dtype=float)
-    if x.size == 0:
+    n = x.size
+    if n == 0:
         return SensorCheck("no samples", 0.0, 0, 0.0)
+    s = np.sort(x)  # one sort gives the extremes, their counts and the levels (NaN sorts last, -inf first)
+    lo, hi = float(s[0]), float(s[-1])
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        bad = int(np.count_nonzero(~np.isfinite(s)))
+        return SensorCheck(f"{bad} of {n} samples not finite (NaN or infinite): acquisition fault", math.nan, 0, 0.0)
     mean = float(np.mean(x))
     std = float(np.std(x))
     rms = float(np.sqrt(mean * mean + std * std))
-    levels = int(np.unique(x).size)
-    hi, lo = float(np.max(x)), float(np.min(x))
-    clipped = float(np.count_nonzero((x == hi) | (x == lo)) / x.size)
+    levels = 1 + int(np.count_nonzero(s[1:] != s[:-1]))
+    at_rails = int(np.searchsorted(s, lo, "right")) + n - int(np.searchsorted(s, hi, "left"))
+    clipped = float((at_rails - (n if hi == lo else 0)) / n)
     if std == 0.0 or std < 1e-9 * abs(mean):
         problem = f"flat signal (standard deviation {std:.3g}, level {mean:.3g}): sensor dead or disconnected"
     elif clipped >= 0.5:
@@ -65,3 +80,36 @@ def check_window(x: np.ndarray) -> SensorCheck:
     else:
         problem = ""
     return SensorCheck(problem, rms, levels, clipped)
+
+
+class SensorWatch:
+    """The recent samples of one measurement, by stream index, to check the windows decided on it.
+
+    Every observer stream carries the same measurement y = r + ŷ: the first stream to bring a
+    sample wins, a later copy of it is skipped. A start or a gap begins afresh (a window that
+    reaches before it can no longer be checked).
+    """
+
+    def __init__(self):
+        self._samples = IndexedBuffer()
+        self._cursor = StreamCursor()
+
+    def push(self, first_index: int, y: np.ndarray) -> None:
+        """Samples ``y`` from stream index ``first_index``."""
+        offset = self._cursor.offset(first_index)
+        if offset is None or offset > 0:
+            self._samples.clear(first=first_index)
+        elif offset < 0:  # seen already, in part or whole
+            y, first_index = y[-offset:], first_index - offset
+        if y.size:
+            self._samples.append(y)
+            self._cursor.advance(first_index, y.size)
+
+    def check(self, i0: int, i1: int) -> SensorCheck | None:
+        """:func:`check_window` of samples [i0, i1); None when they are not all held."""
+        x = self._samples.view(i0, i1)
+        return None if x is None else check_window(x[0])
+
+    def trim(self, keep_from: int) -> None:
+        """Forget the samples before index ``keep_from``."""
+        self._samples.trim(keep_from)

@@ -25,6 +25,7 @@ import numpy as np
 
 from bearing_common.states import FaultState
 
+from .not_diagnosed import NotDiagnosed
 from .scores import WindowScores
 
 
@@ -35,9 +36,9 @@ class Decision:
     Times in seconds of signal time (sample index / sample rate from stream start).
     ``state`` is the published (hysteresis-filtered) state, ``label`` the window's own
     label; ``scores`` what the window showed (:mod:`.scores`); ``detail`` says what was
-    special about the window (a missing stream); ``sensor_problem``, ``speed_problem`` and
-    ``resolution_problem`` why the window was not diagnosed at all ("" when it was: then it
-    took part in the hysteresis).
+    special about the window (a missing stream); ``not_diagnosed`` why the window was not
+    diagnosed at all (:mod:`.not_diagnosed`; None when it was: then it took part in the
+    hysteresis).
     """
 
     time: float
@@ -50,20 +51,13 @@ class Decision:
     changed: bool
     scores: WindowScores = field(default_factory=WindowScores)
     detail: str = ""
-    sensor_problem: str = ""
-    speed_problem: str = ""
-    resolution_problem: str = ""
-
-    @property
-    def problem(self) -> str:
-        """Why the window was not diagnosed ("" when it was)."""
-        return self.sensor_problem or self.speed_problem or self.resolution_problem
+    not_diagnosed: NotDiagnosed | None = None
 
     @property
     def diagnosed(self) -> bool:
         """Whether the window was diagnosed (it was fit to: the sensor signal usable, the speed known, a
         hypothesis resolved)."""
-        return not self.problem
+        return self.not_diagnosed is None
 
 
 class StateTracker:

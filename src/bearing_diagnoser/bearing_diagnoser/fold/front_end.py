@@ -8,6 +8,10 @@ arrived (one observer deployed), and holds the decision (no window is decided, t
 published state stands) if it went silent (a dead observer) or is expected back (a
 restarted producer's), until it is back: deciding without it mistakes one fault for the
 other (the folding statistic needs both to explain the stronger one away).
+
+Every window's samples are checked first (:mod:`bearing_diagnoser.decision.sensor_health`, as
+the envelope-spectrum front end does): a dead, clipped, quantised or non-finite signal is not
+diagnosed (``sensor``), never scored (the fold would call a flat line NORMAL, by its RMS floor).
 """
 
 from __future__ import annotations
@@ -19,10 +23,12 @@ from bearing_common.states import FaultState
 
 from ..decision.config import DiagnoserConfig
 from ..decision.front_end import WindowVerdict
+from ..decision.not_diagnosed import SENSOR
 from ..decision.schedule import WindowSchedule
+from ..decision.sensor_health import SensorWatch
 from ..decision.stream_blocks import StreamBlocks
 from .calibration import calibrate
-from .scoring import HYPOTHESES, FoldScorer, all_finite
+from .scoring import HYPOTHESES, FoldScorer, FoldScores, all_finite
 
 
 class FoldFrontEnd:
@@ -52,6 +58,7 @@ class FoldFrontEnd:
         self.envelope_band = settings.band
         self._scorer: FoldScorer | None = None
         self._schedule: WindowSchedule | None = None  # in envelope blocks, once the first stream exists
+        self._sensor = SensorWatch()
 
     def thresholds(self) -> tuple[float, float]:
         """(CFAR threshold, kurtosis threshold) in use: the settings', else derived from ``pfa``."""
@@ -73,6 +80,7 @@ class FoldFrontEnd:
              expected: set, snapshot: bool = False) -> list[WindowVerdict]:
         """A snapshot is no different here: the pause before it is a gap its windows never straddle,
         so each snapshot is decided by the windows it holds alone."""
+        self._sensor.push(first_index, y)
         return self._run(streams, expected)
 
     def flush(self, streams: dict[FaultState, StreamBlocks], expected: set) -> list[WindowVerdict]:
@@ -85,7 +93,8 @@ class FoldFrontEnd:
             return out
         if self._scorer is None:
             self._scorer = FoldScorer(self.settings, self.bearing, self.thresholds())
-        fe = next(iter(streams.values())).env.envelope_rate  # the same for every stream (one sample rate)
+        env = next(iter(streams.values())).env  # the same rate and blocks for every stream (one sample rate)
+        fe, d = env.envelope_rate, env.decimation
         if self._schedule is None:
             s = self.settings
             self._schedule = WindowSchedule(0, max(1, int(round(s.window_s * fe))), max(1, int(round(s.hop_s * fe))))
@@ -108,7 +117,11 @@ class FoldFrontEnd:
                     break
             outage = any(h in streams or h in expected for h in missing)
             wins = {h: s.window(b0, b1) for h, s in ready.items()}
-            if not outage and all(win is not None and all_finite(win["env"]) for win in wins.values()):
+            sensor = None if outage else self._sensor.check(b0 * d, b1 * d)  # None: samples before a gap
+            if sensor is not None and not sensor.ok:
+                out.append(WindowVerdict.undiagnosed(b0 / fe, b1 / fe, FoldScores(rms=sensor.rms, kurtosis=math.nan),
+                                                     SENSOR, sensor.problem))
+            elif not outage and all(win is not None and all_finite(win["env"]) for win in wins.values()):
                 st = next(iter(ready.values()))
                 scores = self._scorer.scores(wins, {h: s.fault_hz for h, s in ready.items()},
                                              {h: s.has_model for h, s in ready.items()}, st.env.decimation, b0, fe)
@@ -118,4 +131,5 @@ class FoldFrontEnd:
             schedule.advance()
             for s in streams.values():
                 s.trim(schedule.next_start)
+            self._sensor.trim(schedule.next_start * d)
         return out

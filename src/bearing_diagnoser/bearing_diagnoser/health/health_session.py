@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..decision.not_diagnosed import NotDiagnosed
 from .iso20816 import DEFAULT_MACHINE_CLASS
 from .monitor import FaultEvidence, HealthMonitor, HealthRecord
 from .trend import TrendConfig
@@ -51,15 +52,15 @@ class HealthSettings:
 @dataclass(frozen=True)
 class DecidedWindow:
     """A fault decision's window as the health needs it: its end (s, the data's clock), its scores,
-    why it was not diagnosed ("" when it was)."""
+    why it was not diagnosed (None when it was)."""
 
     end: float
     scores: object  # bearing_diagnoser.decision.scores.WindowScores
-    problem: str = ""
+    not_diagnosed: NotDiagnosed | None = None
 
     def evidence(self) -> FaultEvidence:
-        if self.problem:
-            return FaultEvidence(problem=f"not diagnosed: {self.problem}")
+        if self.not_diagnosed is not None:
+            return FaultEvidence(problem=f"not diagnosed: {self.not_diagnosed}", not_diagnosed=self.not_diagnosed)
         s = self.scores
         return FaultEvidence({h.label: float(v) for h, v in s.significance.items()},
                              {h.label: float(v) for h, v in s.accumulated().items()},

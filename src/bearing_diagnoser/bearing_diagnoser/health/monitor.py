@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..decision.not_diagnosed import NotDiagnosed
 from ..decision.sensor_health import check_window
 from .indicators import ConditionIndicators, condition_indicators, default_envelope_band
 from .iso20816 import DEFAULT_MACHINE_CLASS, iso_zone, machine_class
@@ -41,16 +42,22 @@ class FaultEvidence:
     problem : str
         Why there is no evidence ("" when there is): not diagnosed (sensor, speed, resolution),
         no decision yet, the decision impossible.
+    not_diagnosed : NotDiagnosed or None
+        The decided window's own outcome when it was not diagnosed
+        (:mod:`bearing_diagnoser.decision.not_diagnosed`; ``problem`` then says it too).
     """
 
     significance: dict = field(default_factory=dict)
     accumulated: dict = field(default_factory=dict)
     untested: dict = field(default_factory=dict)
     problem: str = ""
+    not_diagnosed: NotDiagnosed | None = None
 
     def to_json(self) -> dict:
         out = {"significance": dict(self.significance), "accumulated": dict(self.accumulated),
                "untested": dict(self.untested)}
+        if self.not_diagnosed is not None:
+            out["not_diagnosed"] = self.not_diagnosed.to_json()
         return out | ({"problem": self.problem} if self.problem else {})
 
 

@@ -21,13 +21,13 @@ when it became significant.
 
 A snapshot shorter than one window tests only the hypotheses its resolution separates
 (:func:`.fault_combs.untestable`; the others are ``untested`` in its scores, and it is not
-diagnosed when none is left: ``resolution_problem``); its tests pay for its own length in
+diagnosed when none is left: ``resolution``); its tests pay for its own length in
 the budget above, which counts a window every T/2 and so overstates a snapshot sensor's
 tests an hour: conservative.
 
 A window is not diagnosed while the shaft speed is known only to within more than ±2 %
 (a nameplate speed the 1x line has not confirmed yet): every part's comb then slides over
-several percent and can fit a healthy machine's lines (``speed_problem``).
+several percent and can fit a healthy machine's lines (not diagnosed: ``speed``).
 
 The thesis' blocks of every observer stream that carries a model or a train are measured
 over the same samples (:mod:`bearing_diagnoser.decision.thesis_blocks`). A window whose
@@ -46,6 +46,7 @@ from bearing_common.states import FaultState
 
 from ..decision.config import DiagnoserConfig
 from ..decision.front_end import WindowVerdict
+from ..decision.not_diagnosed import RESOLUTION, SENSOR, SPEED
 from ..decision.scores import THESIS_SUMMARY_KEYS, WindowScores
 from ..decision.stream_blocks import StreamBlocks
 from ..decision.thesis_blocks import XCORR_LAG_S, explained_fraction, train_correlation
@@ -167,14 +168,14 @@ class SpectralFrontEnd:
                                 horizon_s=w.horizon_windows * (w.end - w.start) / self.fs, untested=w.untested)
         _thesis_blocks(scores, streams, w.start, w.end)
         if not w.sensor.ok:
-            return WindowVerdict(t0, t1, FaultState.UNKNOWN, 0.0, scores, sensor_problem=w.sensor.problem)
+            return WindowVerdict.undiagnosed(t0, t1, scores, SENSOR, w.sensor.problem)
         if not both:
-            return WindowVerdict(t0, t1, FaultState.UNKNOWN, 0.0, scores, resolution_problem=(
+            return WindowVerdict.undiagnosed(t0, t1, scores, RESOLUTION, (
                 f"a {t1 - t0:.3g} s snapshot resolves {self.fs / (w.end - w.start):.3g} Hz, too coarse at "
                 f"{60 * w.speed_hz:.0f} rpm for every hypothesis: "
                 + "; ".join(f"{h.label}: {why}" for h, why in w.untested.items())))
         if w.speed_source == "told" and w.speed_sigma > UNSURE_SPEED * w.speed_hz:
-            return WindowVerdict(t0, t1, FaultState.UNKNOWN, 0.0, scores, speed_problem=(
+            return WindowVerdict.undiagnosed(t0, t1, scores, SPEED, (
                 f"shaft speed not confirmed: told {60 * w.speed_hz:.0f} rpm "
                 f"± {200 * w.speed_sigma / w.speed_hz:.0f} %, "
                 "no 1x line in the vibration (yet); a tachometer on shaft_speed, or a smaller rpm_tolerance, "
