@@ -95,5 +95,8 @@ def native_stacks(pids: list) -> str:
     for pid in pids:
         run = subprocess.run([spy, "dump", "--native", "--pid", str(pid)], capture_output=True, text=True,
                              timeout=60)
-        dumps.append(f"--- pid {pid}\n{run.stdout}{run.stderr}")
+        if run.returncode == 0:
+            dumps.append(f"--- pid {pid}\n{run.stdout}")
+        else:  # gone, or exiting (a zombie: no executable any more)
+            dumps.append(f"--- pid {pid}: {(run.stderr.strip().splitlines() or ['?'])[0]}")
     return "\n".join(dumps)
