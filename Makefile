@@ -21,7 +21,7 @@ test: setup
 	@$(VENV_PY) -m pytest tests
 
 # the real-CLI tests (tests/ros/test_ros2_cli.py) in the full install: ros2 launch/run/topic/param/interface
-# and Ctrl-C; not in `make test` (the first build takes 8 min of CI's budget; see issue 19)
+# and Ctrl-C (10 stops of the fleet launch); CI (.ci/run) runs it after `make test` (its first build: 8 min)
 cli-test: setup full-install
 	@BEARING_REAL_CLI=1 $(VENV_PY) -m pytest tests/ros/test_ros2_cli.py
 
@@ -62,7 +62,8 @@ SOAK_MINUTES ?= 30
 soak: setup
 	@$(VENV_PY) benchmarks/soak.py --minutes $(SOAK_MINUTES) --out out/soak.md --docs docs/robustness.md
 
-# Ctrl-C to the starved `ros2 launch` of the monitoring graph, STOPS times (default 20): 0 stalls expected
+# Ctrl-C to the starved `ros2 launch` of the monitoring graph, STOPS times (default 20): 0 stalls expected;
+# the starving adds busy loops until the simulator is behind real time, a slow stop prints native stacks
 STOPS ?= 20
 stops: setup full-install
 	@BEARING_REAL_CLI=1 BEARING_STOPS=$(STOPS) $(VENV_PY) -m pytest tests/ros/test_ros2_cli.py -k starved_monitor -q -s

@@ -23,7 +23,7 @@ setup(
     entry_points={
         "console_scripts": [
             "bearing-graph = bearing_bringup.graph_cli:main",
-            "nodes = bearing_bringup.multi_node_process:main",
+            "nodes = bearing_bringup.executables:nodes",
         ],
     },
 )

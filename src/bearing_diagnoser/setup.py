@@ -20,7 +20,7 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            'diagnoser = bearing_diagnoser.node:main',
+            'diagnoser = bearing_diagnoser.executables:diagnoser',
             'bearing-diagnose = bearing_diagnoser.diagnose_cli:main',
             'bearing-accuracy = bearing_diagnoser.accuracy_cli:main',
             'bearing-trend = bearing_diagnoser.health.trend_cli:main',

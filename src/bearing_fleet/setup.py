@@ -18,7 +18,7 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            "fleet = bearing_fleet.node:main",
+            "fleet = bearing_fleet.executables:fleet",
             "bearing-fleet = bearing_fleet.fleet_cli:main",
         ],
     },

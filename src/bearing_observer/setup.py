@@ -20,7 +20,7 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            'observer = bearing_observer.node:main',
+            'observer = bearing_observer.executables:observer',
             'bearing-identify = bearing_observer.identify_cli:main',
         ],
     },

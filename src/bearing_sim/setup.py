@@ -19,7 +19,7 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            'simulator = bearing_sim.node:main',
+            'simulator = bearing_sim.executables:simulator',
             'bearing-sim = bearing_sim.sim_cli:main',
         ],
     },

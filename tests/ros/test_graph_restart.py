@@ -65,6 +65,7 @@ class Recovery:
     latest: object  # the last fault_state the listener had when the late participant started
     late: list  # what a participant started after the recovery received
     exit_line: str
+    stop_output: str  # what bearing-graph printed from the Ctrl-C on (a node's stall dump, if any)
 
 
 def pids(lines) -> dict:
@@ -148,6 +149,7 @@ def recovery(request, tmp_path_factory) -> Recovery:
         latest = states.items[-1][1]
         late = late_participant_states(graph.domain_id)
         assert starter.returncode is None, graph.output()
+        seen = len(starter.lines)
         os.kill(starter.process.pid, signal.SIGINT)
         graph.wait_until(lambda: starter.returncode is not None, 60.0, "bearing-graph to stop")
         result = Recovery(
@@ -155,7 +157,7 @@ def recovery(request, tmp_path_factory) -> Recovery:
                                          if m and m.group(1) == "restarted"],
             old_pid, new_pid, restarted - killed, output_at - killed, state_at - killed if recovered else None,
             stable, latest, late,
-            next((line for line in starter.lines if "exit codes:" in line), ""))
+            next((line for line in starter.lines if "exit codes:" in line), ""), "\n".join(starter.lines[seen:]))
         print(f"\n{victim} killed: restarted after {result.kill_to_restart:.1f} s, its output back after "
               f"{result.kill_to_output:.1f} s, first correct fault_state after "
               f"{'(none)' if result.kill_to_state is None else f'{result.kill_to_state:.1f} s'}; "
@@ -175,7 +177,8 @@ def test_killed_node_is_restarted_and_the_graph_keeps_running(recovery):
     assert recovery.kill_to_restart < recovery.kill_to_output
     if recovery.victim == "simulator":  # a new stream: stamps back to 0, decided as such
         assert stamp(recovery.stable[0]) < 5.0
-    assert recovery.exit_line.endswith("exit codes: simulator 0, or_observer 0, ir_observer 0, diagnoser 0")
+    assert recovery.exit_line.endswith("exit codes: simulator 0, or_observer 0, ir_observer 0, diagnoser 0"), \
+        recovery.stop_output
 
 
 def test_fault_states_after_recovery_are_correct(recovery):

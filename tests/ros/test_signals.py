@@ -13,10 +13,11 @@ import time
 
 import pytest
 from graph_helpers import BAG_CLI, params_file
-from ros_harness import REPO_ROOT
+from ros_harness import REPO_ROOT, executable
 
 from bearing_bringup.graph import GRAPH
 from bearing_common import topics
+from bearing_common.node_main import STOP_STALL_S
 from bearing_recordings.bag_read import read_bag
 
 pytestmark = pytest.mark.ros
@@ -110,3 +111,61 @@ def test_shutdown_hook_publishes_a_last_message(ros_graph, mode):
     send(probe.process.pid, mode)
     assert_clean_exit(probe)
     assert [m.status[0].message for m in diagnostics][-1] == STOPPED
+
+
+def catches(pid: int, sig: signal.Signals) -> bool:
+    """Process ``pid`` has a handler for ``sig`` (``SigCgt`` in /proc: Python catches SIGINT from
+    its start, SIGTERM only once node_main's stop signals are in place)."""
+    with open(f"/proc/{pid}/status") as status:
+        caught = next(int(line.split()[1], 16) for line in status if line.startswith("SigCgt:"))
+    return bool(caught >> (sig - 1) & 1)
+
+
+def assert_stopped_while_starting(member, program: str, mode: str, sent: float) -> None:
+    """Exit 0, no traceback, the one line of a stop during the start-up, well within the watchdog."""
+    assert_clean_exit(member)
+    took = time.monotonic() - sent
+    assert any(f"{program}: {MODES[mode][0].name} while starting: stopped" in line for line in member.lines), \
+        "\n".join(member.lines)
+    assert took < STOP_STALL_S, f"{program} took {took:.1f} s to stop"
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_a_node_stopped_during_its_imports_ends_at_once(ros_graph, mode):
+    """A signal once the executable handles it (its first lines), while the node module imports
+    numpy, numba and rclpy (seconds under load): a stop, not a KeyboardInterrupt traceback or
+    death by SIGTERM."""
+    member = ros_graph.start("bearing_diagnoser", "diagnoser")
+    deadline = time.monotonic() + 30.0
+    while not catches(member.process.pid, signal.SIGTERM):
+        assert member.returncode is None and time.monotonic() < deadline, "\n".join(member.lines)
+        time.sleep(0.002)
+    with open(f"/proc/{member.process.pid}/maps") as maps:
+        assert "_multiarray_umath" not in maps.read(), "numpy already imported: too late to test the imports"
+    sent = time.monotonic()
+    send(member.process.pid, mode)
+    assert_stopped_while_starting(member, "diagnoser", mode, sent)
+    assert not any("[diagnoser]" in line for line in member.lines), "the node was built: not during its imports"
+
+
+#: each node's node name, and its log line once its compiles are done
+FIRST_COMPILE = {("bearing_sim", "simulator"): ("simulator", "simulator ready after"),  # warm-up after the build
+                 ("bearing_observer", "observer"): ("or_observer", "observer: vibration")}  # warm-up in the build
+
+
+@pytest.mark.parametrize("package, program", FIRST_COMPILE)
+def test_a_node_stopped_during_its_first_numba_compile_ends_cleanly(ros_graph, tmp_path, package, program):
+    """As after an install: numba's cache is empty and the node, once in the graph, compiles its
+    kernels for seconds, much of it inside LLVM (C calls the signal handler waits for); Ctrl-C
+    meanwhile is a stop."""
+    node, compiled = FIRST_COMPILE[(package, program)]
+    member = ros_graph.processes.start(program, [str(executable(package, program))],
+                                       extra_env={"NUMBA_CACHE_DIR": str(tmp_path / "numba")})
+    ros_graph.wait_until(lambda: node in ros_graph.node.get_node_names() or member.returncode is not None,
+                         60.0, f"{node} in the graph")
+    time.sleep(0.3)  # into the compile (seconds from scratch)
+    assert not any(compiled in line for line in member.lines), "the compile ended before the signal"
+    sent = time.monotonic()
+    send(member.process.pid, "SIGINT")
+    assert_stopped_while_starting(member, program, "SIGINT", sent)
+    assert not any(compiled in line for line in member.lines)

@@ -50,3 +50,25 @@ def test_offline_diagnosis_imports_no_ros_or_matplotlib():
                                "bearing_recordings.load, bearing_recordings.mat_files, bearing_recordings.npz_files")
     assert "numba" in imported and "scipy" in imported
     assert not imported & {"rclpy", "matplotlib"}, sorted(imported & {"rclpy", "matplotlib"})
+
+
+def _node_entry_modules() -> dict[str, str]:
+    """Every node executable's console script (the names without ``bearing-``): name -> module."""
+    found = {}
+    for setup in sorted((REPO_ROOT / "src").glob("*/setup.py")):
+        for name, module in re.findall(r"""["']([a-z_]+)\s*=\s*([\w.]+):\w+["']""", setup.read_text()):
+            found[name] = module
+    return found
+
+
+@pytest.mark.parametrize("name, module", sorted(_node_entry_modules().items()))
+def test_a_node_executable_handles_stop_signals_before_its_heavy_imports(name, module):
+    """Its console script's module imports nothing heavy (not even numpy): the process's stop
+    signals are in place (node_main.run_executable) before the node module's imports, seconds
+    under load, so that Ctrl-C meanwhile is a stop, not a KeyboardInterrupt traceback."""
+    imported = _imported("-c", f"import {module}")
+    assert not imported & {*HEAVY, "numpy", "scipy"}, f"{name}: {sorted(imported & {*HEAVY, 'numpy', 'scipy'})}"
+
+
+def test_every_node_executable_is_listed():
+    assert set(_node_entry_modules()) == {"simulator", "observer", "diagnoser", "fleet", "nodes"}

@@ -71,3 +71,47 @@ def test_a_stop_that_stalls_prints_the_stacks_and_exits_1(cleanup_s, code):
         assert "left" not in run.stdout
     else:
         assert run.stdout.strip() == "left True" and not run.stderr
+
+
+HELD_IN_C = """
+import os, signal, sys, time
+from bearing_common.node_main import process_stop_signals
+with process_stop_signals("probe") as stop:
+    # the main thread as in one long C call (LLVM compiling a kernel): Python's handler cannot run
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    os.kill(os.getpid(), getattr(signal, sys.argv[1]))
+    time.sleep(10.0)
+print("not stopped")
+"""
+
+
+@pytest.mark.parametrize("signame", ["SIGINT", "SIGTERM"])
+def test_a_start_held_in_c_code_is_ended_by_the_watcher(signame):
+    """A stop signal while the start-up is held in C: the watcher thread ends the process as a stop
+    (one line, exit 0) START_GRACE_S later, long before the stall watchdog."""
+    from bearing_common.stop_signals import START_GRACE_S
+
+    start = time.monotonic()
+    run = subprocess.run([sys.executable, "-c", HELD_IN_C, signame], capture_output=True, text=True, timeout=30)
+    took = time.monotonic() - start
+    assert run.returncode == 0, run.stderr
+    assert run.stderr == f"probe: {signame} while starting: stopped\n" and not run.stdout
+    assert START_GRACE_S <= took < 4.0
+
+
+STARTING = """
+import os, signal, time
+from bearing_common.node_main import process_stop_signals
+with process_stop_signals("probe") as stop:
+    with stop.aborting():
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(10.0)  # Python code: the handler raises StopRequested here at once
+print("not stopped")
+"""
+
+
+def test_a_start_in_python_code_ends_at_the_signal():
+    start = time.monotonic()
+    run = subprocess.run([sys.executable, "-c", STARTING], capture_output=True, text=True, timeout=30)
+    assert run.returncode == 0 and run.stderr == "probe: SIGTERM while starting: stopped\n", run.stderr
+    assert time.monotonic() - start < 3.0

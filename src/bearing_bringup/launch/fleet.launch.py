@@ -21,6 +21,7 @@ from launch_ros.actions import Node
 
 from bearing_bringup.fleet_plan import load_fleet, parameters_file, processes
 from bearing_bringup.graph import FLEET_CONFIG_NAME
+from bearing_bringup.launch_ctrl_c import hear_ctrl_c
 from bearing_bringup.restart_policy import MAX_RESTARTS, RESTART_DELAY_S
 
 
@@ -50,6 +51,7 @@ def fleet_nodes(context):
 
 
 def generate_launch_description():
+    hear_ctrl_c()  # also when started with SIGINT ignored (a script's background job)
     default_fleet = os.path.join(get_package_share_directory("bearing_bringup"), "config", FLEET_CONFIG_NAME)
     return LaunchDescription([
         DeclareLaunchArgument("fleet_file", default_value=default_fleet,

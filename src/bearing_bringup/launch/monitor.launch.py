@@ -17,6 +17,7 @@ from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
 from bearing_bringup.graph import CONFIG_NAME, GRAPH
+from bearing_bringup.launch_ctrl_c import hear_ctrl_c
 from bearing_bringup.restart_policy import MAX_RESTARTS, RESTART_DELAY_S
 
 
@@ -28,6 +29,7 @@ def lifecycle(spec) -> dict:
 
 
 def generate_launch_description():
+    hear_ctrl_c()  # also when started with SIGINT ignored (a script's background job)
     default_params = os.path.join(get_package_share_directory("bearing_bringup"), "config", CONFIG_NAME)
     params_file = LaunchConfiguration("params_file")
     namespace = LaunchConfiguration("namespace")

@@ -10,9 +10,14 @@
   valid — the place for a last message (the diagnoser's /diagnostics "stopped"; call
   ``publisher.wait_for_all_acked(...)`` there if it must arrive) — and the node is
   destroyed and rclpy shut down.
-* A signal while the nodes are being built (the diagnoser's JIT warm-up takes seconds of
-  CPU) ends the start-up at once (:class:`~bearing_common.stop_signals.StopRequested`),
-  with one line on stderr and exit code 0.
+* A signal while the process starts ends the start-up at once, with one line on stderr and
+  exit code 0: from the console script's first line (:func:`run_executable`: the node
+  module's imports of numpy, scipy, numba and rclpy take seconds under load) until its nodes
+  are built (the JIT warm-ups: seconds of CPU, or a first numba compile after an install), and
+  in any other section a node marks with ``stop.aborting()`` (the simulator's warm-up).
+  The signal raises :class:`~bearing_common.stop_signals.StopRequested` in the main thread;
+  where that thread is held in one C call (LLVM compiling a kernel), the signal watcher ends
+  the process itself ``START_GRACE_S`` after the signal.
 * Invalid parameters (ValueError while building the node) give one line on stderr
   and exit code 2.
 * A stop still under way ``STOP_STALL_S`` after the signal prints the stack of every
@@ -35,7 +40,9 @@ in one process (:func:`run_nodes_main`: the fleet's multi-node processes) share 
 single-threaded executor, and each node's hook is called.
 """
 
+import contextlib
 import ctypes
+import importlib
 import os
 import signal
 import sys
@@ -97,26 +104,62 @@ def end_process(code: int):
     os._exit(code)
 
 
+def run_executable(program: str, main: str, args=None):
+    """The console script of a node executable: ``main`` ("module:function", the node's
+    ``main(args)``, which calls :func:`run_node_main`) imported and run with the process's stop
+    signals handled from the start, so that a stop during the module's imports ends the start-up
+    (one line, exit 0) as one during the nodes' construction does. Light: import nothing heavy
+    before calling it."""
+    with process_stop_signals(program):
+        module, _, function = main.partition(":")
+        return getattr(importlib.import_module(module), function)(args)
+
+
+_process_stop: StopSignals | None = None  #: the process's, once a start entered it (a process has one)
+
+
+@contextlib.contextmanager
+def process_stop_signals(program: str):
+    """The process's :class:`StopSignals` (with the stall watchdog), entered on first use with the
+    start-up abortable; a stop while starting (StopRequested) ends the process with one line and
+    exit code 0."""
+    global _process_stop
+    if _process_stop is not None:
+        yield _process_stop
+        return
+    stop = StopSignals(stall_s=STOP_STALL_S, stuck_start=lambda signum: stopped_while_starting(program, signum))
+    stop.abort = True  # starting, until the nodes are built (set before the handlers are)
+    try:
+        with stop:  # a signal may raise StopRequested as soon as its handler is in place
+            _process_stop = stop
+            yield stop
+    except StopRequested:
+        stopped_while_starting(program, stop.signal)
+    finally:
+        _process_stop = None
+
+
+def stopped_while_starting(program: str, signum: int):
+    """End the process as a stop during its start-up: one line on stderr, exit code 0."""
+    print(f"{program}: {signal.Signals(signum).name} while starting: stopped", file=sys.stderr)  # noqa: T201
+    end_process(0)
+
+
 def run_nodes(program: str, make_nodes, run=None, args=None) -> int:
     """The run of :func:`run_nodes_main` up to rclpy's shutdown; return the exit code."""
-    import rclpy
-    from rclpy.signals import SignalHandlerOptions
-
-    with StopSignals(stall_s=STOP_STALL_S) as stop:
-        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-        nodes = []
+    with process_stop_signals(program) as stop:
+        nodes, rclpy = [], None  # rclpy is bound once its import completed
         try:
-            try:
-                stop.abort = True
-                nodes = make_nodes()
-                stop.abort = False
-            except ValueError as exc:
-                print(f"{program}: {exc}", file=sys.stderr)  # noqa: T201 (the one-line error is the interface)
-                return 2
-            except StopRequested:
-                print(f"{program}: {signal.Signals(stop.signal).name} while starting: stopped",  # noqa: T201
-                      file=sys.stderr)
-                return 0
+            with stop.aborting():
+                import rclpy
+                from rclpy.signals import SignalHandlerOptions
+
+                rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+                try:
+                    nodes = make_nodes()
+                except ValueError as exc:
+                    print(f"{program}: {exc}", file=sys.stderr)  # noqa: T201 (the one-line error is the interface)
+                    return 2
             (run or spin_until)(nodes, stop)
             if stop:
                 nodes[0].get_logger().info(f"{signal.Signals(stop.signal).name} received: stopping")
@@ -127,5 +170,6 @@ def run_nodes(program: str, make_nodes, run=None, args=None) -> int:
         finally:
             for node in nodes:
                 node.destroy_node()
-            rclpy.try_shutdown()
+            if rclpy is not None:
+                rclpy.try_shutdown()
     return 0

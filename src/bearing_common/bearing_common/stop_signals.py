@@ -18,19 +18,28 @@ when the signal arrives, even while the main thread is blocked in C code where P
 handler cannot run yet (a thread waits on the signal wake-up descriptor), and keeps
 running after the ``with`` block, through the process's exit.
 
-While ``abort`` is true (a node's start-up: imports, JIT warm-up, seconds of CPU), the first
-signal also raises :class:`StopRequested` in the main thread, so that the start-up ends
-instead of running on past the stall watchdog.
+While ``abort`` is true (a node's start-up: imports, JIT warm-up, seconds of CPU; set it with
+:meth:`StopSignals.aborting`), the first signal also raises :class:`StopRequested` in the main
+thread, so that the start-up ends instead of running on past the stall watchdog. Python runs
+that handler only between bytecodes of the main thread: one C call (numba's LLVM compile of
+a large kernel, an extension module's import) can hold it off for seconds under load. With
+``stuck_start``, the watcher thread then ends the start-up itself: if the main thread is still
+in the abortable section ``START_GRACE_S`` after the signal, it calls ``stuck_start(signum)``,
+which must end the process (nothing of a start-up needs cleaning up but rclpy's context, which
+the process's end takes with it).
 """
 
 from __future__ import annotations
 
+import contextlib
 import faulthandler
 import os
 import signal
 import threading
+from collections.abc import Callable
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+START_GRACE_S = 1.0  #: s the main thread has to leave an abortable section after a stop signal
 
 
 class StopRequested(BaseException):
@@ -40,22 +49,23 @@ class StopRequested(BaseException):
 class StopSignals:
     """True once SIGINT or SIGTERM arrived (``signal`` says which came first)."""
 
-    def __init__(self, stall_s: float | None = None):
+    def __init__(self, stall_s: float | None = None, stuck_start: Callable[[int], None] | None = None):
         self.signal: int | None = None
         self.abort = False  #: the first signal raises StopRequested (see the module's docstring)
         self._old = {}
         self._stall_s = stall_s
+        self._stuck_start = stuck_start
         self._wakeup: tuple[int, int] | None = None
         self._old_wakeup_fd = -1
 
     def __enter__(self) -> StopSignals:
-        for sig in STOP_SIGNALS:
-            self._old[sig] = signal.signal(sig, self._handle)
-        if self._stall_s is not None:
+        if self._stall_s is not None:  # the watcher first: a signal may come (and raise) once a handler is in
             self._wakeup = os.pipe()
             os.set_blocking(self._wakeup[1], False)
             self._old_wakeup_fd = signal.set_wakeup_fd(self._wakeup[1], warn_on_full_buffer=False)
             threading.Thread(target=self._watch, args=(self._wakeup[0],), name="stop-stall", daemon=True).start()
+        for sig in STOP_SIGNALS:
+            self._old[sig] = signal.signal(sig, self._handle)
         return self
 
     def _watch(self, fd: int) -> None:
@@ -67,8 +77,23 @@ class StopSignals:
                 if byte[0] in STOP_SIGNALS and not armed:
                     faulthandler.dump_traceback_later(self._stall_s, exit=True)
                     armed = True
+                    if self.abort and self._stuck_start is not None:
+                        threading.Timer(START_GRACE_S, self._end_stuck_start, args=(byte[0],)).start()
         finally:
             os.close(fd)
+
+    def _end_stuck_start(self, signum: int) -> None:
+        if self.abort:  # the main thread has not left the abortable section: blocked in C code
+            self._stuck_start(signum)
+
+    @contextlib.contextmanager
+    def aborting(self):
+        """A section (start-up work: imports, compiles) that a stop signal ends with StopRequested."""
+        self.abort = True
+        try:
+            yield self
+        finally:
+            self.abort = False
 
     def _handle(self, signum, _frame) -> None:
         if self.signal is None:

@@ -110,11 +110,12 @@ class SimulatorNode(Node):
 WARM_UP_SCHEDULE = [(FaultState.OUTER_RACE, 0.002), (FaultState.INNER_RACE, 0.002), (FaultState.NORMAL, 0.002)]
 
 
-def warm_up(node: SimulatorNode, stop) -> None:
-    """Load (or compile) the simulator's compiled code before the real-time clock starts."""
+def warm_up(node: SimulatorNode) -> None:
+    """Load (or compile) the simulator's compiled code before the real-time clock starts (a stop
+    signal meanwhile ends it: ``stop.aborting()``)."""
     start = time.monotonic()
     scratch = Simulator(node.run.config, WARM_UP_SCHEDULE)
-    while not scratch.finished and not stop:
+    while not scratch.finished:
         scratch.advance(node.run.chunk_samples)
     node.get_logger().info(f"simulator ready after {time.monotonic() - start:.2f} s of loading/compilation")
 
@@ -125,7 +126,8 @@ def run_node(node: SimulatorNode, stop) -> None:
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     try:
-        warm_up(node, stop)
+        with stop.aborting():  # a first compile after an install: seconds, mostly in LLVM (C)
+            warm_up(node)
         gate = SubscriberGate(parse_wait_spec(node.values["wait_for_subscribers"]),
                               float(node.values["subscriber_timeout"]), time.monotonic())
         while not stop and not gate.is_open(node.subscribers, time.monotonic()):
