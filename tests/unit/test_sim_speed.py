@@ -40,7 +40,7 @@ def test_a_constant_profile_runs_the_constant_speed_path_bit_for_bit():
     sched = [(F.OUTER_RACE, 0.02), (F.INNER_RACE, 0.02)]
     a = simulate(SimulationConfig(rpm=1500.0, sample_rate=FS), sched)
     b = simulate(SimulationConfig(sample_rate=FS, speed_profile=SpeedProfile.parse("0:1500,5:1500")), sched)
-    for key in ("accel", "unbalance", "truth"):
+    for key in {"accel", "unbalance", "truth"}:
         assert np.array_equal(a[key], b[key]), key
     np.testing.assert_allclose(b["shaft_speed"], 1500 * RPM_TO_RAD_S, rtol=1e-15)
 

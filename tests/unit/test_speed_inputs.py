@@ -1,5 +1,5 @@
 """Measured shaft speed in the offline inputs: a .npz's ``shaft_speed``, a .mat speed or tachometer
-channel (``--speed-channel``), bags that carry ``shaft_speed`` or ``tachometer`` (bearing_recordings)."""
+channel (``--speed-channel``), bags that carry ``shaft_speed`` or ``shaft_pulses`` (bearing_recordings)."""
 
 from __future__ import annotations
 

@@ -16,7 +16,7 @@ QoS, chosen on purpose:
   stream's start instead of losing it (each chunk carries its sample index and stamp, so
   history is never mistaken for new signal);
 * ``shaft_speed``: reliable, keep last 10 (slow, only the latest matters);
-* ``tachometer``: reliable, volatile, keep last 50 — a stream like the vibration (each
+* ``shaft_pulses`` (tachometer pulses): reliable, volatile, keep last 50 — a stream like the vibration (each
   message carries the pulses of one interval; a lost one would cost the shaft angle
   revolutions), so the same slack;
 * ``fault_state``: reliable, transient local, keep last 10 — a late ``ros2 topic echo``
@@ -67,7 +67,7 @@ class Topic:
 VIBRATION = Topic("vibration/drive_end", "bearing_msgs/msg/VibrationChunk", 50)
 UNBALANCE = Topic("unbalance", "bearing_msgs/msg/VibrationChunk", 50)
 SHAFT_SPEED = Topic("shaft_speed", "bearing_msgs/msg/ShaftSpeed", 10)
-TACHOMETER = Topic("tachometer", "bearing_msgs/msg/Tachometer", 50)
+TACHOMETER = Topic("shaft_pulses", "bearing_msgs/msg/Tachometer", 50)
 TRUTH = Topic("sim/truth", "bearing_msgs/msg/FaultState", 10, latched=True)
 RESIDUAL_OUTER_RACE = Topic("residual/outer_race", "bearing_msgs/msg/Residual", 50, latched=True)
 RESIDUAL_INNER_RACE = Topic("residual/inner_race", "bearing_msgs/msg/Residual", 50, latched=True)

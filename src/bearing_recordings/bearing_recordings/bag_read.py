@@ -296,7 +296,7 @@ def read_bag(path, namespace: str | None = None, vibration_topic: str = topics.V
     -------
     BagContents
         ``chunks`` (VibrationChunk of ``vibration_topic``), ``speeds`` (``shaft_speed``),
-        ``pulses`` (``tachometer``), ``fault_states`` (the diagnoser's ``fault_state``) and
+        ``pulses`` (``shaft_pulses``), ``fault_states`` (the diagnoser's ``fault_state``) and
         ``truth`` (``sim/truth``).
 
     Raises
@@ -435,7 +435,7 @@ def load_bag(path, channel: str | None = None, namespace: str | None = None) -> 
     The chunks are joined by ``first_sample_index`` (gaps zero-filled, logged as a
     warning); ``source`` is the chunks' source field (picks the model set), ``rpm`` the
     median of ``shaft_speed``, ``truth`` per sample from ``sim/truth`` when recorded. When the
-    recorded speed changes (``shaft_speed``, or ``tachometer`` pulses, which take precedence),
+    recorded speed changes (``shaft_speed``, or ``shaft_pulses`` tachometer pulses, which take precedence),
     ``shaft_speed`` holds it per sample and ``rpm`` its mean.
     The stamp of the first sample is kept as ``recording.start_time`` (s), the bearing
     stored by ``bearing-bag from-mat`` as ``recording.bearing``.

@@ -49,9 +49,12 @@ def load_npz(path, sample_rate: float | None = None, rpm: float | None = None,
     rec = Recording(x, fs, None if rpm is None else check_rpm(rpm), "simulator",
                     None if truth is None else truth.astype(int).ravel(), ch, str(path),
                     rpm_tolerance=None if told or rpm is None else MEASURED_RPM_TOLERANCE)
-    if "shaft_speed" in data:
-        if told:
-            rec.notes = [f"the shaft speed was given ({rpm:g} rpm): the file's shaft_speed series is not used"]
-        else:
-            rec.set_shaft_speed(data["shaft_speed"], f"{path}:shaft_speed")
+    try:
+        speed = data["shaft_speed"]
+    except KeyError:
+        return rec
+    if told:
+        rec.notes = [f"the shaft speed was given ({rpm:g} rpm): the file's shaft_speed series is not used"]
+    else:
+        rec.set_shaft_speed(speed, f"{path}:shaft_speed")
     return rec

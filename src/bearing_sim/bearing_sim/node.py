@@ -3,7 +3,7 @@
 Topics (relative names, so a namespace per machine works):
 ``vibration/drive_end`` and ``unbalance`` (VibrationChunk), ``shaft_speed``
 (ShaftSpeed, rad/s, ``speed_rate`` messages per second of signal time), optionally
-``tachometer`` (Tachometer: the pulses of each chunk), ``sim/truth`` (FaultState,
+``shaft_pulses`` (Tachometer: the pulses of each chunk, with ``tachometer``), ``sim/truth`` (FaultState,
 transient local; evaluation only), optionally ``/clock``. Stamps are simulation time
 (0 at the start of the run, continuing across repeats and speed changes). Paced to
 wall-clock time unless ``realtime`` is false. ``rpm``, ``noise_density`` and

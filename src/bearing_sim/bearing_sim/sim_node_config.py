@@ -43,8 +43,8 @@ PARAMETERS = (
                   lambda v: _check_speed("", v)),
     ParameterSpec("speed_rate", 100.0, "shaft_speed messages per second of signal time, stamped at multiples "
                   "of 1/speed_rate s with the speed at that instant (rad/s)", positive),
-    ParameterSpec("tachometer", False, "also publish tachometer pulses (bearing_msgs/Tachometer), one message "
-                  "per chunk"),
+    ParameterSpec("tachometer", False, "also publish tachometer pulses (bearing_msgs/Tachometer) on "
+                  "shaft_pulses, one message per chunk"),
     ParameterSpec("tachometer_pulses", 1, "tachometer pulses per shaft revolution", positive),
     ParameterSpec("tachometer_jitter", 1e-5, "standard deviation of the tachometer pulse times' error (s), "
                   "Gaussian truncated at 5 sigma; below a tenth of the pulse period",
