@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup full-install demo test unit lint fuzz bench accuracy false-alarms trend soak cli-test stops clean
+.PHONY: setup full-install demo test unit lint fuzz bench accuracy false-alarms trend soak cli-test stops speed-data speed-tracking clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -52,6 +52,15 @@ accuracy: setup
 FALSE_ALARM_HOURS ?= 10
 false-alarms: setup
 	@$(VENV_PY) benchmarks/false_alarms.py --hours $(FALSE_ALARM_HOURS) --out out/false_alarms.md --docs docs/results.md
+
+# test data for changing speed: simulated ramps and the development recordings warped along the same
+# speed profiles, as .npz files with shaft_speed -> out/speed_ramps/ (README, "Changing speed")
+speed-data: setup
+	@$(VENV_PY) -m benchmarks.speed_ramps --out out/speed_ramps
+
+# accuracy of the tacho-less speed tracking on synthetic, simulated and warped ramps -> out/speed_tracking.md
+speed-tracking: setup
+	@$(VENV_PY) -m benchmarks.speed_tracking --out out/speed_tracking.md
 
 # early warning on the six FEMTO lives (against the textbook rule) and on healthy recordings -> out/trend.md
 trend: setup

@@ -90,3 +90,47 @@ def test_cli_unwritable_output_and_missing_source(tmp_path, capsys):
     assert exc.value.code != 0
     with pytest.raises(SystemExit):
         main(["--scenario", "or", "--schedule", "or:1", "--out", str(tmp_path / "x.npz")])
+
+
+def test_cli_rpm_profile_writes_the_shaft_speed(tmp_path):
+    from bearing_common.shaft_angle import RPM_TO_RAD_S
+    out = tmp_path / "ramp.npz"
+    rc = main(["--schedule", "or:0.05", "--sample-rate", "12000", "--rpm-profile", "0:1500,0.05:1800",
+               "--quiet", "--out", str(out)])
+    assert rc == 0
+    d = np.load(out)
+    assert set(d.files) == {"t", "accel", "unbalance", "sample_rate", "rpm", "truth", "source", "shaft_speed"}
+    assert d["shaft_speed"].shape == d["accel"].shape == (600,)
+    np.testing.assert_allclose(d["shaft_speed"], np.interp(d["t"], [0, 0.05], [1500, 1800]) * RPM_TO_RAD_S,
+                               rtol=1e-12)
+    assert float(d["rpm"]) == pytest.approx(1650.0, rel=1e-12)  # the mean over the run
+
+
+def test_cli_speed_wobble(tmp_path):
+    out = tmp_path / "wobble.npz"
+    assert main(["--schedule", "normal:0.02", "--sample-rate", "12000", "--speed-wobble", "0.05:0.02",
+                 "--quiet", "--out", str(out)]) == 0
+    w = np.load(out)["shaft_speed"] * 30 / np.pi
+    assert w.max() == pytest.approx(1800 * 1.05, rel=2e-3) and w.min() == pytest.approx(1800 * 0.95, rel=2e-3)
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["--rpm-profile", "0:900,x"], "seconds:rpm"),
+    (["--rpm-profile", "1:900,1:1800"], "increase strictly"),
+    (["--rpm-profile", "0:900,1:9000"], "6000"),
+    (["--speed-wobble", "0.1"], "FRACTION:PERIOD"),
+    (["--speed-wobble", "1.5:2"], "amplitude"),
+])
+def test_cli_bad_speed_profiles(tmp_path, capsys, argv, msg):
+    rc = main(["--schedule", "or:0.01", *argv, "--out", str(tmp_path / "x.npz")])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert msg in err and err.count("\n") == 1, err
+    assert not (tmp_path / "x.npz").exists()
+
+
+def test_cli_rpm_and_rpm_profile_exclude_each_other(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--schedule", "or:0.01", "--rpm", "1500", "--rpm-profile", "0:900,1:1800",
+              "--out", str(tmp_path / "x.npz")])
+    assert exc.value.code == 2 and "not allowed with" in capsys.readouterr().err

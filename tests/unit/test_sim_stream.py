@@ -92,3 +92,50 @@ def test_noise_change_applies_from_the_next_chunk():
     assert s.config.noise_density == DEFAULT_NOISE_DENSITY and s.rpm == 1800.0
     with pytest.raises(ValueError, match="noise_density"):
         s.set_noise_density(-1.0)
+
+
+def _run(schedule, **kw):
+    from bearing_sim.sim_node_config import SimulationRun
+    run_kw = {k: kw.pop(k) for k in ("speed_rate", "tacho_pulses", "tacho_jitter") if k in kw}
+    return SimulationStream(SimulationRun(SimulationConfig(**kw), schedule, N, **run_kw), False)
+
+
+def test_shaft_speed_goes_out_at_the_stated_rate_with_the_speed_at_its_stamp():
+    from bearing_common.shaft_angle import SpeedProfile
+    profile = SpeedProfile.parse("0:1500,0.05:1800")
+    s = _run([(F.NORMAL, 0.05)], speed_rate=250.0, sample_rate=12000.0, speed_profile=profile)
+    s.chunk_samples = 90  # 7.5 ms chunks: the stamps (4 ms apart) do not line up with them
+    samples = [x for c in drain(s) for x in s.speed_samples(c)]
+    stamps = np.array([t for t, _ in samples])
+    np.testing.assert_allclose(stamps, np.arange(13) * 0.004, atol=1e-12)  # 0 .. 0.048 s, each once
+    np.testing.assert_allclose([w for _, w in samples], profile.omega(stamps), rtol=1e-12)
+
+
+def test_default_speed_rate_is_one_message_per_default_chunk_at_its_stamp():
+    s = _run([(F.NORMAL, 0.02)])
+    c = s.next_chunk()
+    assert s.speed_samples(c) == [(0.0, pytest.approx(1800 * np.pi / 30))]
+
+
+def test_tachometer_pulses_mark_whole_turns_with_the_stated_jitter_whatever_the_chunking():
+    from bearing_common.shaft_angle import SpeedProfile
+    profile = SpeedProfile.parse("0:1200,0.5:1800")
+    pulses = {}
+    for chunk_samples in (480, 331):
+        s = _run([(F.NORMAL, 0.5)], tacho_pulses=2, tacho_jitter=20e-6, sample_rate=12000.0,
+                 speed_profile=profile, seed=7)
+        s.chunk_samples = chunk_samples
+        times, count = [], 0
+        for c in drain(s):
+            t, first = s.tacho_pulses(c)
+            assert first == count and np.all((t >= c.t0) & (t < c.t0 + len(c) / 12000.0))
+            count += t.size
+            times.append(t)
+        pulses[chunk_samples] = np.concatenate(times)
+    np.testing.assert_array_equal(pulses[480], pulses[331])  # each pulse's error is its own
+    t = pulses[480]
+    turns = profile.angle(t) / np.pi  # 2 pulses per revolution
+    assert t.size == int(np.ceil(profile.angle(0.5) / np.pi))
+    np.testing.assert_array_equal(np.rint(turns), np.arange(t.size))
+    timing_error = (turns - np.rint(turns)) * np.pi / profile.omega(t)
+    assert np.std(timing_error) == pytest.approx(20e-6, rel=0.25) and np.max(np.abs(timing_error)) <= 5 * 20e-6

@@ -16,6 +16,9 @@ QoS, chosen on purpose:
   stream's start instead of losing it (each chunk carries its sample index and stamp, so
   history is never mistaken for new signal);
 * ``shaft_speed``: reliable, keep last 10 (slow, only the latest matters);
+* ``shaft_pulses`` (tachometer pulses): reliable, volatile, keep last 50 — a stream like the vibration (each
+  message carries the pulses of one interval; a lost one would cost the shaft angle
+  revolutions), so the same slack;
 * ``fault_state``: reliable, transient local, keep last 10 — a late ``ros2 topic echo``
   gets the current state (the last of at most 10 recent decisions), and a burst of
   decisions (the diagnoser catching up) does not overwrite samples a reliable reader has
@@ -64,6 +67,7 @@ class Topic:
 VIBRATION = Topic("vibration/drive_end", "bearing_msgs/msg/VibrationChunk", 50)
 UNBALANCE = Topic("unbalance", "bearing_msgs/msg/VibrationChunk", 50)
 SHAFT_SPEED = Topic("shaft_speed", "bearing_msgs/msg/ShaftSpeed", 10)
+TACHOMETER = Topic("shaft_pulses", "bearing_msgs/msg/Tachometer", 50)
 TRUTH = Topic("sim/truth", "bearing_msgs/msg/FaultState", 10, latched=True)
 RESIDUAL_OUTER_RACE = Topic("residual/outer_race", "bearing_msgs/msg/Residual", 50, latched=True)
 RESIDUAL_INNER_RACE = Topic("residual/inner_race", "bearing_msgs/msg/Residual", 50, latched=True)
@@ -78,7 +82,7 @@ RESIDUALS = {FaultState.OUTER_RACE: RESIDUAL_OUTER_RACE, FaultState.INNER_RACE: 
 
 #: Every topic of one machine's graph, in the order recorders list them.
 GRAPH_TOPICS: dict[str, Topic] = {t.name: t for t in (
-    VIBRATION, UNBALANCE, SHAFT_SPEED, TRUTH, RESIDUAL_OUTER_RACE, RESIDUAL_INNER_RACE, FAULT_STATE, HEALTH,
+    VIBRATION, UNBALANCE, SHAFT_SPEED, TACHOMETER, TRUTH, RESIDUAL_OUTER_RACE, RESIDUAL_INNER_RACE, FAULT_STATE, HEALTH,
     DIAGNOSTICS)}
 
 

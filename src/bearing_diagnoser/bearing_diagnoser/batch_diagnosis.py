@@ -18,6 +18,7 @@ that the one that kills its worker is the one reported, and the others go on.
 from __future__ import annotations
 
 import logging
+import math
 import multiprocessing
 import time
 import traceback
@@ -43,7 +44,8 @@ class FileOptions:
     """The options of a run, applied to every file as to one file alone (so that a file's lines in a
     batch are those of its own run): sample rate (Hz), shaft speed (rev/min) and its relative
     tolerance, channel, units or sensitivity of a file that does not state what its numbers measure,
-    bearing (None: the recording's), model set, method."""
+    the file's speed or tachometer channel (its units, pulses per revolution), bearing (None: the
+    recording's), model set, method."""
 
     sample_rate: float | None = None
     rpm: float | None = None
@@ -51,6 +53,9 @@ class FileOptions:
     channel: str | None = None
     units: str | None = None
     sensitivity: str | None = None
+    speed_channel: str | None = None
+    speed_units: str | None = None
+    pulses_per_rev: int = 1
     bearing: Bearing | None = None
     model_set: str | None = None
     method: str = "model"
@@ -112,10 +117,17 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
     cpu = time.process_time()
     try:
         rec = load_recording(path, sample_rate=options.sample_rate, rpm=options.rpm, channel=options.channel,
-                             units=options.units, sensitivity=options.sensitivity)
+                             units=options.units, sensitivity=options.sensitivity,
+                             speed_channel=options.speed_channel, speed_units=options.speed_units,
+                             pulses_per_rev=options.pulses_per_rev)
         report.signal_s = rec.duration
         for note in rec.notes or ():
             notes.emit_note(note)
+        if rec.speed_varies:
+            lo, hi = rec.shaft_speed.min() * 30.0 / math.pi, rec.shaft_speed.max() * 30.0 / math.pi
+            notes.emit_note(f"warning: the measured shaft speed varies from {lo:.0f} to {hi:.0f} rpm "
+                            f"({100 * rec.speed_spread:.1f} % of its mean); the decision assumes one speed, "
+                            f"the mean {rec.rpm:.0f} rpm")
         res = diagnose_recording(rec, model_set=options.model_set, method=options.method, rpm=options.rpm,
                                  bearing=options.bearing or rec.bearing,
                                  keep_streams=plot_dir is not None, rpm_tolerance=options.rpm_tolerance)

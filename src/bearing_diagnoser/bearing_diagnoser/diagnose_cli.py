@@ -2,7 +2,8 @@
 
     bearing-diagnose PATH... [--jobs N] [--progress | --no-progress] [--rpm RPM] [--sample-rate HZ]
                      [--channel NAME] [--bearing NAME|FILE.yaml] [--units g|m/s2 | --sensitivity S]
-                     [--model-set NAME] [--method model|envelope] [--plot DIR] [--report DIR] [--json]
+                     [--model-set NAME] [--speed-channel NAME --speed-units rpm|rad/s|hz|pulses
+                     [--pulses-per-rev N]] [--method model|envelope] [--plot DIR] [--report DIR] [--json]
 
 PATH is a .npz (a real machine's recording unless its ``source`` says ``simulator``, as
 ``bearing-sim`` writes: ``bearing_recordings.npz_files``), a MATLAB recording (CWRU, MFPT, or
@@ -71,6 +72,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--sensitivity", metavar="S",
                    help="instead of --units, the numbers are a sensor's output: e.g. 100mV/g or 10.2mV/(m/s2) "
                         "(numbers in volts), 0.05/g (plain numbers, e.g. WAV integer PCM as fractions of full scale)")
+    p.add_argument("--speed-channel", metavar="NAME",
+                   help="the file's speed or tachometer channel, sampled with the vibration (.mat variable, "
+                        ".npz array): the measured shaft speed per sample (then no --rpm)")
+    p.add_argument("--speed-units", choices=("rpm", "rad/s", "hz", "pulses"),
+                   help="units of --speed-channel; pulses: a tachometer signal (edges detected)")
+    p.add_argument("--pulses-per-rev", type=int, default=1, metavar="N",
+                   help="tachometer pulses per shaft revolution of --speed-units pulses (default 1)")
     p.add_argument("--model-set", help="sim_48k, sim_12k, cwru_de_6205 or none (default: from the input)")
     p.add_argument("--method", choices=("model", "envelope"), default="model",
                    help="model: observers + envelope-spectrum decision (default); envelope: textbook reference")
@@ -106,6 +114,12 @@ def _options(args):
 
     if args.rpm_tolerance is not None and not 0.0 < args.rpm_tolerance < 0.5:
         raise InputError(f"--rpm-tolerance must be in (0, 0.5), got {args.rpm_tolerance:g}")
+    if (args.speed_channel is None) != (args.speed_units is None):
+        raise InputError("--speed-channel and --speed-units go together")
+    if args.pulses_per_rev < 1:
+        raise InputError(f"--pulses-per-rev must be >= 1, got {args.pulses_per_rev}")
+    if args.speed_channel is not None and args.rpm is not None:
+        raise InputError("give either --rpm or --speed-channel, not both")
     if args.units is not None and args.sensitivity is not None:
         raise InputError("give --units or --sensitivity, not both")
     if args.sensitivity is not None:
@@ -113,6 +127,8 @@ def _options(args):
     return FileOptions(sample_rate=None if args.sample_rate is None else check_rate(args.sample_rate),
                        rpm=None if args.rpm is None else check_rpm(args.rpm), rpm_tolerance=args.rpm_tolerance,
                        channel=args.channel, units=args.units, sensitivity=args.sensitivity,
+                       speed_channel=args.speed_channel, speed_units=args.speed_units,
+                       pulses_per_rev=args.pulses_per_rev,
                        bearing=load_bearing(args.bearing) if args.bearing else None, model_set=args.model_set,
                        method=args.method)
 

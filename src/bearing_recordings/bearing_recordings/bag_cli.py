@@ -5,19 +5,22 @@ for machines without ``ros2 bag`` (the PyPI ROS 2 wheels do not include rosbag2)
     bearing-bag play BAG_DIR [--rate R] [--clock] [--topics T ...] [--loop] [--delay S]
                      [--wait-for-subscribers [N]] [--namespace NS] [--chunk-duration S]
     bearing-bag info BAG_DIR
-    bearing-bag from-mat FILE.mat [--sample-rate HZ] [--channel NAME] [--rpm RPM] [--bearing NAME|FILE.yaml]
+    bearing-bag from-mat FILE.mat|FILE.npz [--sample-rate HZ] [--channel NAME] [--rpm RPM] [--bearing NAME|FILE.yaml]
                          [--units g|m/s2] [--chunk-duration 0.01] [--start-time 0] [--duration S]
                          [--resample HZ] --out BAG_DIR
 
 Bags are ordinary rosbag2 directories (MCAP by default) with the message definitions
 embedded: ``ros2 bag info/play`` of a full ROS 2 install and ``bearing-diagnose BAG_DIR``
-read them.  Bad input: one ``bearing-bag: error: ...`` line on stderr, exit status 2.
+read them.  ``from-mat`` also takes a ``.npz`` (e.g. a ``bearing-sim`` run or a warped
+recording); a changing ``shaft_speed`` in it goes into the bag's ``shaft_speed`` messages.
+Bad input: one ``bearing-bag: error: ...`` line on stderr, exit status 2.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 EXIT_BAD_INPUT = 2
 
@@ -56,7 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("bag", metavar="BAG_DIR")
 
     m = sub.add_parser("from-mat", help="convert a MATLAB recording (CWRU, MFPT, one signal) into a bag")
-    m.add_argument("mat", metavar="FILE.mat")
+    m.add_argument("mat", metavar="FILE.mat|FILE.npz")
     m.add_argument("--channel", help="variable, e.g. X105_DE_time (default: the record's drive end, "
                    "MFPT's gs, or a file's only signal)")
     m.add_argument("--sample-rate", type=float, metavar="HZ",
@@ -120,10 +123,12 @@ def main(argv=None) -> int:
                 print(line)
         elif args.command == "from-mat":
             from .bag_write import recording_to_bag
-            from .mat_files import load_mat
+            from .load import load_recording
             bearing = load_bearing(args.bearing)  # validated before anything is written
-            rec = load_mat(args.mat, sample_rate=args.sample_rate, rpm=args.rpm, channel=args.channel,
-                           units=args.units)
+            if Path(args.mat).suffix.lower() not in (".mat", ".npz"):
+                raise InputError(f"{args.mat}: expected a .mat or .npz file")
+            rec = load_recording(args.mat, sample_rate=args.sample_rate, rpm=args.rpm, channel=args.channel,
+                                 units=args.units)
             for note in rec.notes or ():
                 print(f"bearing-bag: {note}", file=sys.stderr)
             res = recording_to_bag(rec, args.out, chunk_duration=args.chunk_duration, start_time=args.start_time,

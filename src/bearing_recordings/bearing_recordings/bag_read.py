@@ -26,6 +26,7 @@ import numpy as np
 
 from bearing_common import topics
 from bearing_common.bearings import Bearing, BearingError, load_bearing
+from bearing_common.shaft_angle import angle_from_pulses
 from bearing_common.stamps import to_seconds
 from bearing_common.units import sample_rate_problem
 
@@ -167,6 +168,19 @@ class SpeedSample:
 
 
 @dataclass
+class PulseBatch:
+    """One ``Tachometer`` message: the pulses in [stamp, stamp + duration) s."""
+
+    stamp: float
+    duration: float
+    pulse_times: np.ndarray  # s, absolute (stamp + offsets)
+    first_pulse_index: int
+    pulses_per_revolution: int
+    source: str
+    log_time: float
+
+
+@dataclass
 class StateSample:
     """One ``FaultState`` (from ``fault_state`` or ``sim/truth``)."""
 
@@ -190,6 +204,7 @@ class BagContents:
     topics: dict  # recorded name -> (type, message count)
     chunks: list = field(default_factory=list)
     speeds: list = field(default_factory=list)
+    pulses: list = field(default_factory=list)
     fault_states: list = field(default_factory=list)
     truth: list = field(default_factory=list)
 
@@ -199,6 +214,20 @@ class BagContents:
         if not self.speeds:
             return None
         return float(np.median([s.angular_velocity for s in self.speeds])) * 60.0 / (2.0 * np.pi)
+
+    def speed_at(self, t: np.ndarray) -> np.ndarray | None:
+        """Shaft speed (rad/s) at times ``t`` (s, stamps' clock): from the tachometer pulses when at least
+        three were recorded (:func:`bearing_common.shaft_angle.angle_from_pulses`), else ``shaft_speed``
+        interpolated linearly between its stamps and held beyond them; None without either."""
+        times = np.concatenate([b.pulse_times for b in self.pulses]) if self.pulses else np.empty(0)
+        if times.size >= 3:
+            return angle_from_pulses(np.unique(times), t, self.pulses[0].pulses_per_revolution)[1]
+        if not self.speeds:
+            return None
+        order = np.argsort([s.stamp for s in self.speeds], kind="stable")
+        stamps = np.array([self.speeds[i].stamp for i in order])
+        values = np.array([self.speeds[i].angular_velocity for i in order])
+        return np.interp(t, stamps, values)
 
 
 def _state_sample(msg, log_time: float) -> StateSample:
@@ -267,7 +296,8 @@ def read_bag(path, namespace: str | None = None, vibration_topic: str = topics.V
     -------
     BagContents
         ``chunks`` (VibrationChunk of ``vibration_topic``), ``speeds`` (``shaft_speed``),
-        ``fault_states`` (the diagnoser's ``fault_state``) and ``truth`` (``sim/truth``).
+        ``pulses`` (``shaft_pulses``), ``fault_states`` (the diagnoser's ``fault_state``) and
+        ``truth`` (``sim/truth``).
 
     Raises
     ------
@@ -275,6 +305,7 @@ def read_bag(path, namespace: str | None = None, vibration_topic: str = topics.V
         Not a bag, truncated or damaged, no vibration topic, or a topic of the wrong type.
     """
     wanted = {vibration_topic: topics.VIBRATION.msgtype, topics.SHAFT_SPEED.name: topics.SHAFT_SPEED.msgtype,
+              topics.TACHOMETER.name: topics.TACHOMETER.msgtype,
               topics.FAULT_STATE.name: topics.FAULT_STATE.msgtype, topics.TRUTH.name: topics.TRUTH.msgtype}
     with open_bag(path) as reader:
         recorded = {c.topic: c.msgtype for c in reader.connections}
@@ -315,6 +346,12 @@ def read_bag(path, namespace: str | None = None, vibration_topic: str = topics.V
             elif rel == topics.SHAFT_SPEED.name:
                 out.speeds.append(SpeedSample(to_seconds(msg.header.stamp), float(msg.angular_velocity),
                                               str(msg.source), log_time))
+            elif rel == topics.TACHOMETER.name:
+                stamp = to_seconds(msg.header.stamp)
+                out.pulses.append(PulseBatch(stamp, float(msg.duration),
+                                             stamp + np.asarray(msg.pulse_offsets, dtype=float),
+                                             int(msg.first_pulse_index), max(1, int(msg.pulses_per_revolution)),
+                                             str(msg.source), log_time))
             elif rel == topics.FAULT_STATE.name:
                 out.fault_states.append(_state_sample(msg, log_time))
             else:
@@ -397,7 +434,9 @@ def load_bag(path, channel: str | None = None, namespace: str | None = None) -> 
     ``channel`` is the relative VibrationChunk topic (default ``vibration/drive_end``).
     The chunks are joined by ``first_sample_index`` (gaps zero-filled, logged as a
     warning); ``source`` is the chunks' source field (picks the model set), ``rpm`` the
-    median of ``shaft_speed``, ``truth`` per sample from ``sim/truth`` when recorded.
+    median of ``shaft_speed``, ``truth`` per sample from ``sim/truth`` when recorded. When the
+    recorded speed changes (``shaft_speed``, or ``shaft_pulses`` tachometer pulses, which take precedence),
+    ``shaft_speed`` holds it per sample and ``rpm`` its mean.
     The stamp of the first sample is kept as ``recording.start_time`` (s), the bearing
     stored by ``bearing-bag from-mat`` as ``recording.bearing``.
     """
@@ -411,6 +450,13 @@ def load_bag(path, channel: str | None = None, namespace: str | None = None) -> 
         LOG.warning("%s: %d gaps in %s (%d samples, %.3f s) filled with zeros", path, len(stream.gaps),
                     channel or topics.VIBRATION.name, missing, missing / stream.sample_rate)
     truth = truth_per_sample(contents.truth, stream.start_time, stream.samples.size, stream.sample_rate)
-    return Recording(stream.samples, stream.sample_rate, contents.rpm, stream.source, truth,
-                     channel or topics.VIBRATION.name, str(path), start_time=stream.start_time,
-                     bearing=bag_bearing(path), rpm_tolerance=None if contents.rpm is None else MEASURED_RPM_TOLERANCE)
+    rec = Recording(stream.samples, stream.sample_rate, contents.rpm, stream.source, truth,
+                    channel or topics.VIBRATION.name, str(path), start_time=stream.start_time,
+                    bearing=bag_bearing(path), rpm_tolerance=None if contents.rpm is None else MEASURED_RPM_TOLERANCE)
+    try:
+        speed = contents.speed_at(stream.start_time + np.arange(stream.samples.size) / stream.sample_rate)
+    except ValueError as exc:  # pulses that do not increase
+        raise BagError(f"{path}: tachometer: {exc}") from None
+    if speed is not None and np.ptp(speed) > 0.0:  # a changing speed: the series, its mean as rpm
+        rec.set_shaft_speed(speed, f"{path}: shaft speed")
+    return rec

@@ -137,7 +137,8 @@ def recording_to_bag(rec: Recording, out, chunk_duration: float = DEFAULT_CHUNK_
     """Write a recording into a bag as a sensor driver would have published it.
 
     ``vibration/drive_end`` in chunks of ``chunk_duration`` s, ``shaft_speed`` at the
-    recording's speed (see :func:`write_signal_bag`); source = the recording's (``cwru``,
+    recording's speed (see :func:`write_signal_bag`; the measured speed at each chunk's start
+    when the recording carries one per sample); source = the recording's (``cwru``,
     ``mfpt``, ...). ``max_duration`` (s) keeps only the start; ``resample_to`` (Hz)
     resamples (anti-aliased) first, as a driver configured for that rate would deliver;
     ``bearing`` (catalog name or description) is stored in the bag's custom data.
@@ -145,43 +146,49 @@ def recording_to_bag(rec: Recording, out, chunk_duration: float = DEFAULT_CHUNK_
     if rec.rpm is None:
         raise BagError(f"{rec.path}: the recording states no shaft speed; give --rpm")
     rpm = check_rpm(rec.rpm)
-    x, fs = rec.accel, rec.sample_rate
+    x, fs, speed = rec.accel, rec.sample_rate, rec.shaft_speed
     if resample_to is not None:
         if not (np.isfinite(resample_to) and resample_to > 0):
             raise BagError(f"resample rate must be positive, got {resample_to:g} Hz")
         from .resampling import resample  # scipy.signal: only when resampling (not for bearing-bag --help)
 
-        x, fs = resample(x, fs, resample_to), float(resample_to)
+        x, fs_in, fs = resample(x, fs, resample_to), fs, float(resample_to)
+        if speed is not None:
+            speed = np.interp(np.arange(x.size) / fs, np.arange(speed.size) / fs_in, speed)
     if max_duration is not None:
         if not (np.isfinite(max_duration) and max_duration > 0):
             raise BagError(f"duration must be positive, got {max_duration:g} s")
         x = x[: max(1, int(round(max_duration * fs)))]
     count = write_signal_bag(out, x, fs, rpm, source=rec.source, chunk_duration=chunk_duration,
-                             start_time=start_time, storage=storage, namespace=namespace, bearing=bearing)
+                             start_time=start_time, storage=storage, namespace=namespace, bearing=bearing,
+                             shaft_speed=None if speed is None else speed[:x.size])
     return Conversion(str(out), count, int(x.size), fs, rpm, x.size / fs)
 
 
 def write_signal_bag(out, samples, sample_rate: float, rpm: float, source: str, speed_source: str = "",
                      chunk_duration: float = DEFAULT_CHUNK_DURATION, start_time: float = 0.0,
                      storage: str = "mcap", namespace: str = "", frame_id: str = "drive_end",
-                     bearing: str = "") -> int:
+                     bearing: str = "", shaft_speed=None) -> int:
     """Write a uniformly sampled acceleration signal (m/s²) as the graph's topics; return the chunk count.
 
     ``vibration/drive_end``: VibrationChunk of ``chunk_duration`` s (the last may be
     shorter), consecutive ``first_sample_index``, stamp = ``start_time`` + index /
-    ``sample_rate``; ``shaft_speed``: one ShaftSpeed (rad/s) per chunk, same stamp.
+    ``sample_rate``; ``shaft_speed``: one ShaftSpeed (rad/s) per chunk, same stamp: ``rpm``,
+    or the value of ``shaft_speed`` (rad/s per sample) at the chunk's first sample.
     Log time = stamp.
     """
     return write_signals_bag(out, {namespace: samples}, sample_rate, rpm, source, speed_source, chunk_duration,
-                             start_time, storage, frame_id, bearing, bag_namespace=namespace)
+                             start_time, storage, frame_id, bearing, bag_namespace=namespace,
+                             shaft_speeds=None if shaft_speed is None else {namespace: shaft_speed})
 
 
 def write_signals_bag(out, signals: dict, sample_rate: float, rpm: float, source: str, speed_source: str = "",
                       chunk_duration: float = DEFAULT_CHUNK_DURATION, start_time: float = 0.0,
                       storage: str = "mcap", frame_id: str = "drive_end", bearing: str = "",
-                      bag_namespace: str = "") -> int:
+                      bag_namespace: str = "", shaft_speeds: dict | None = None) -> int:
     """:func:`write_signal_bag` for several motors in one bag: ``signals`` maps a namespace to its
-    acceleration (m/s², all at ``sample_rate`` Hz and ``rpm``); chunks of equal stamps follow each
+    acceleration (m/s², all at ``sample_rate`` Hz and ``rpm``, or at the speed per sample
+    ``shaft_speeds[namespace]`` in rad/s where given); chunks of equal stamps follow each
     other in namespace order. ``bag_namespace`` is stored as the recorded namespace. Returns the
     chunk count of the longest signal.
     """
@@ -216,7 +223,8 @@ def write_signals_bag(out, signals: dict, sample_rate: float, rpm: float, source
                               first_sample_index=i0, source=source,
                               samples=np.ascontiguousarray(x[i0:i0 + n_chunk]))
                 bag.write(vib, log_ns, bag.serialize(chunk, vib_type))
-                speed = Speed(header=Header(stamp=stamp, frame_id=""), angular_velocity=omega,
+                w = omega if not shaft_speeds or ns not in shaft_speeds else float(shaft_speeds[ns][i0])
+                speed = Speed(header=Header(stamp=stamp, frame_id=""), angular_velocity=w,
                               source=speed_source or source)
                 bag.write(spd, log_ns, bag.serialize(speed, spd_type))
             count += 1

@@ -156,6 +156,20 @@ def load_mat(path, sample_rate: float | None = None, rpm: float | None = None,
     return _load_single(path, m, keys, sample_rate, rpm, channel, units, sensitivity)
 
 
+def read_channel(path, name: str) -> np.ndarray:
+    """The values of variable ``name`` (an MFPT file: a field of its struct ``bearing``), e.g. a
+    speed or tachometer channel; :class:`InputError` listing what there is otherwise."""
+    m = _read(path)
+    keys = sorted(k for k in m if not k.startswith("__"))
+    struct = m.get("bearing")
+    fields = struct.dtype.names if getattr(struct, "dtype", None) is not None and struct.dtype.names else ()
+    if name in fields:
+        return np.asarray((struct[0, 0] if struct.ndim == 2 else struct.ravel()[0])[name])
+    if name in keys:
+        return np.asarray(m[name])
+    raise InputError(f"{path}: no channel {name!r}; available: {', '.join(list(fields) + keys)}")
+
+
 def _need_rate(path, sample_rate, hint: str) -> float:
     if sample_rate is None:
         raise InputError(f"{path}: the file does not store its sample rate; give --sample-rate ({hint})")

@@ -10,6 +10,7 @@ picks the model set; without one the source is ``npz`` (no model set: the real-m
 decision). A file with the simulator's arrays but no ``source`` (``bearing-sim`` before it
 wrote one) is read as real too, and a note says how to read it as the simulator's
 (``--model-set``).
+With a changing speed it may hold ``shaft_speed`` (rad/s per sample), read as a tachometer.
 """
 
 from __future__ import annotations
@@ -25,14 +26,26 @@ SIMULATOR = "simulator"
 UNNAMED_SOURCE = "npz"
 
 
+def _contents(path) -> dict:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except Exception as exc:  # zipfile / pickle / OS errors
+        raise InputError(f"{path}: not a readable .npz file ({exc.__class__.__name__}: {exc})") from None
+
+
+def read_channel(path, name: str) -> np.ndarray:
+    """The array ``name`` of the file (e.g. a speed or tachometer channel); :class:`InputError` otherwise."""
+    data = _contents(path)
+    if name not in data:
+        raise InputError(f"{path}: no channel {name!r}; available: {', '.join(sorted(data))}")
+    return data[name]
+
+
 def load_npz(path, sample_rate: float | None = None, rpm: float | None = None,
              channel: str | None = None) -> Recording:
     """Load a .npz recording (module docstring); ``channel`` defaults to ``accel`` (m/s²)."""
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except Exception as exc:  # zipfile / pickle / OS errors
-        raise InputError(f"{path}: not a readable .npz file ({exc.__class__.__name__}: {exc})") from None
+    data = _contents(path)
     ch = channel or "accel"
     if ch not in data:
         raise InputError(f"{path}: no channel {ch!r}; available: {', '.join(sorted(data))}")
@@ -52,9 +65,18 @@ def load_npz(path, sample_rate: float | None = None, rpm: float | None = None,
     if truth is not None and (truth.size != x.size or truth.dtype.kind not in "iu"):
         truth = None
     source, notes = _source(path, data)
-    return Recording(x, fs, None if rpm is None else check_rpm(rpm), source,
-                     None if truth is None else truth.astype(int).ravel(), ch, str(path), notes=notes,
-                     rpm_tolerance=None if told or rpm is None else MEASURED_RPM_TOLERANCE)
+    rec = Recording(x, fs, None if rpm is None else check_rpm(rpm), source,
+                    None if truth is None else truth.astype(int).ravel(), ch, str(path), notes=notes,
+                    rpm_tolerance=None if told or rpm is None else MEASURED_RPM_TOLERANCE)
+    try:
+        speed = data["shaft_speed"]
+    except KeyError:
+        return rec
+    if told:
+        rec.notes = notes + [f"the shaft speed was given ({rpm:g} rpm): the file's shaft_speed series is not used"]
+    else:
+        rec.set_shaft_speed(speed, f"{path}:shaft_speed")
+    return rec
 
 
 def _source(path, data: dict) -> tuple[str, list]:

@@ -21,6 +21,12 @@ MAX_SAMPLES = 360_000_000
 #: Relative accuracy of a shaft speed a rig measured and stored with its recording.
 MEASURED_RPM_TOLERANCE = 0.02
 
+#: A measured speed series *varies* when its spread (max − min) exceeds this fraction of its mean:
+#: more than a measured constant speed is trusted to (:data:`MEASURED_RPM_TOLERANCE`).
+SPEED_VARIATION = MEASURED_RPM_TOLERANCE
+
+RAD_S_PER_RPM = 2.0 * math.pi / 60.0
+
 
 class InputError(ValueError):
     """The input file or its options cannot be used (message is user-facing, one line)."""
@@ -58,6 +64,12 @@ class Recording:
         Relative accuracy of ``rpm`` as the file states it: :data:`MEASURED_RPM_TOLERANCE` for a
         speed the rig measured (CWRU's, MFPT's, a bag's ``shaft_speed``, the simulator's); None
         for a speed from the user or a label (the decision then assumes a nameplate's).
+    shaft_speed : ndarray, shape (n,), or None
+        Measured shaft speed per sample (rad/s), like a tachometer: from a ``.npz``'s
+        ``shaft_speed``, a speed or pulse channel (:mod:`.speed_channel`) or a bag's
+        ``shaft_speed`` when it changes. ``rpm`` is then its mean, so a constant-speed
+        decision still has one number, and :attr:`speed_varies` says whether that hides a
+        change. None when the speed is one number only.
     """
 
     accel: np.ndarray
@@ -71,11 +83,53 @@ class Recording:
     notes: list | None = None
     bearing: Bearing | None = None
     rpm_tolerance: float | None = None
+    shaft_speed: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
         """Length in seconds."""
         return self.accel.size / self.sample_rate
+
+    @property
+    def speed_spread(self) -> float:
+        """(max − min) / mean of :attr:`shaft_speed` (0 without a series)."""
+        if self.shaft_speed is None:
+            return 0.0
+        w = self.shaft_speed
+        return float((w.max() - w.min()) / w.mean())
+
+    @property
+    def speed_varies(self) -> bool:
+        """True when the measured speed changes by more than :data:`SPEED_VARIATION` of its mean."""
+        return self.speed_spread > SPEED_VARIATION
+
+    def set_shaft_speed(self, speed, what: str) -> None:
+        """Attach a measured speed per sample (rad/s; checked by :func:`check_shaft_speed`): ``rpm``
+        becomes its mean, measured (``rpm_tolerance`` = :data:`MEASURED_RPM_TOLERANCE`)."""
+        self.shaft_speed = check_shaft_speed(speed, self.accel.size, what)
+        self.rpm = mean_rpm(self.shaft_speed)
+        self.rpm_tolerance = MEASURED_RPM_TOLERANCE
+
+
+def mean_rpm(speed: np.ndarray) -> float:
+    """Mean of a speed series (rad/s) in rev/min; a constant series gives its value exactly."""
+    mean = speed[0] if np.all(speed == speed[0]) else np.mean(speed)
+    return float(mean) / RAD_S_PER_RPM
+
+
+def check_shaft_speed(speed, n: int, what: str) -> np.ndarray:
+    """A float64 speed series (rad/s) of ``n`` finite, positive values; :class:`InputError` otherwise."""
+    w = np.asarray(speed)
+    if w.dtype.kind not in "fiu":
+        raise InputError(f"{what}: the shaft speed is not numeric (dtype {w.dtype})")
+    w = w.astype(float).ravel()
+    if w.size != n:
+        raise InputError(f"{what}: the shaft speed has {w.size} values for {n} samples (one per sample expected)")
+    bad = ~np.isfinite(w) | (w <= 0.0)
+    if bad.any():
+        raise InputError(f"{what}: the shaft speed is not a positive finite number of rad/s at {int(bad.sum())} "
+                         f"samples, first at index {int(np.argmax(bad))}")
+    return w
 
 
 def check_rate(rate, what: str = "sample rate") -> float:

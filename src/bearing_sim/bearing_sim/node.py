@@ -2,15 +2,17 @@
 
 Topics (relative names, so a namespace per machine works):
 ``vibration/drive_end`` and ``unbalance`` (VibrationChunk), ``shaft_speed``
-(ShaftSpeed, rad/s), ``sim/truth`` (FaultState, transient local; evaluation only),
-optionally ``/clock``. Stamps are simulation time (0 at the start of the run,
-continuing across repeats and speed changes). Paced to wall-clock time unless
-``realtime`` is false. ``rpm``, ``noise_density`` and ``realtime`` can be set while
-it runs (``ros2 param set``); the logic lives in :mod:`.sim_stream` and :mod:`.pacer`.
+(ShaftSpeed, rad/s, ``speed_rate`` messages per second of signal time), optionally
+``shaft_pulses`` (Tachometer: the pulses of each chunk, with ``tachometer``), ``sim/truth`` (FaultState,
+transient local; evaluation only), optionally ``/clock``. Stamps are simulation time
+(0 at the start of the run, continuing across repeats and speed changes). Paced to
+wall-clock time unless ``realtime`` is false. ``rpm``, ``noise_density`` and
+``realtime`` can be set while it runs (``ros2 param set``); a changing speed is the
+``rpm_profile`` / ``speed_wobble`` schedule. The logic lives in :mod:`.sim_stream`
+and :mod:`.pacer`.
 """
 
 import array
-import math
 import sys
 import time
 
@@ -25,7 +27,7 @@ from bearing_common.parameters import declare
 from bearing_common.stamps import to_stamp
 from bearing_common.states import FaultState
 from bearing_msgs.msg import FaultState as FaultStateMsg
-from bearing_msgs.msg import ShaftSpeed, VibrationChunk
+from bearing_msgs.msg import ShaftSpeed, Tachometer, VibrationChunk
 
 from .pacer import Pacer, SubscriberGate
 from .sim_node_config import PARAMETERS, SOURCE, build_run, parse_wait_spec
@@ -49,11 +51,15 @@ class SimulatorNode(Node):
         self.pub_unb = self.create_publisher(VibrationChunk, topics.UNBALANCE.name, topics.qos(topics.UNBALANCE))
         self.pub_speed = self.create_publisher(ShaftSpeed, topics.SHAFT_SPEED.name, topics.qos(topics.SHAFT_SPEED))
         self.pub_truth = self.create_publisher(FaultStateMsg, topics.TRUTH.name, topics.qos(topics.TRUTH))
+        self.pub_tacho = self.create_publisher(Tachometer, topics.TACHOMETER.name, topics.qos(topics.TACHOMETER)) \
+            if self.run.tacho_pulses else None
         self.pub_clock = self.create_publisher(Clock, topics.CLOCK.name, topics.qos(topics.CLOCK)) \
             if self.values["publish_clock"] else None
         pacing = "real time" if self.values["realtime"] else "as fast as possible"
+        speed = (f"{self.stream.rpm:g} rpm" if self.run.config.speed_profile is None
+                 else f"speed profile {self.run.config.speed_profile!r}")
         self.get_logger().info(
-            f"simulating {self._describe()} at {self.stream.rpm:g} rpm, {self.stream.sample_rate:g} Hz, "
+            f"simulating {self._describe()} at {speed}, {self.stream.sample_rate:g} Hz, "
             f"chunks of {self.run.chunk_samples} samples, {pacing}")
 
     def _describe(self) -> str:
@@ -66,6 +72,8 @@ class SimulatorNode(Node):
         them: what a volatile stream needs), else the graph's count for topics of other nodes."""
         own = {topics.VIBRATION.name: self.pub_vib, topics.UNBALANCE.name: self.pub_unb,
                topics.SHAFT_SPEED.name: self.pub_speed, topics.TRUTH.name: self.pub_truth}
+        if self.pub_tacho is not None:
+            own[topics.TACHOMETER.name] = self.pub_tacho
         return own[topic].get_subscription_count() if topic in own else self.count_subscribers(topic)
 
     def on_change(self, changed: dict) -> None:
@@ -93,9 +101,19 @@ class SimulatorNode(Node):
             self.get_logger().info(f"t={onset:.4f} s  true state {state.name}")
         self.pub_vib.publish(self._chunk_msg(stamp, chunk.start_index, chunk.accel, self.values["frame_id"]))
         self.pub_unb.publish(self._chunk_msg(stamp, chunk.start_index, chunk.unbalance, "disk"))
-        speed = ShaftSpeed(angular_velocity=self.stream.rpm * 2.0 * math.pi / 60.0, source=SOURCE)
-        speed.header.stamp = stamp
-        self.pub_speed.publish(speed)
+        for t, omega in self.stream.speed_samples(chunk):
+            speed = ShaftSpeed(angular_velocity=omega, source=SOURCE)
+            speed.header.stamp = to_stamp(t)
+            self.pub_speed.publish(speed)
+        if self.pub_tacho is not None:
+            times, first = self.stream.tacho_pulses(chunk)
+            tacho = Tachometer(duration=len(chunk) / self.stream.sample_rate, first_pulse_index=first,
+                               pulses_per_revolution=self.run.tacho_pulses, timing_jitter=self.run.tacho_jitter,
+                               source=SOURCE)
+            tacho.header.stamp = stamp
+            tacho.header.frame_id = "shaft"
+            tacho.pulse_offsets = array.array("d", (times - chunk.t0).tobytes())
+            self.pub_tacho.publish(tacho)
         return chunk
 
     def _chunk_msg(self, stamp, index, samples, frame_id) -> VibrationChunk:

@@ -1,11 +1,14 @@
-"""Fault schedules: the thesis' scenarios and ``fault:seconds`` SPEC strings.
+"""Schedules: faults (the thesis' scenarios and ``fault:seconds`` SPEC strings) and speed.
 
-A schedule is a list of ``(FaultState, seconds)`` segments played in order; a
-fault starts at the start of its segment.
+A fault schedule is a list of ``(FaultState, seconds)`` segments played in order; a
+fault starts at the start of its segment. A speed schedule is a
+:class:`~bearing_common.shaft_angle.SpeedProfile` from ``T0:RPM0,T1:RPM1,...`` and an
+optional wobble ``FRACTION:PERIOD`` (:func:`speed_profile`).
 """
 
 import math
 
+from bearing_common.shaft_angle import SpeedProfile
 from bearing_common.states import FaultState, parse_fault
 
 DEFAULT_SEGMENT_DURATION = 0.2  #: s, per scenario segment (CONTRACT.md)
@@ -70,3 +73,24 @@ def validate_schedule(schedule):
             raise ValueError(f"the simulator has no model for {state.label!r}")
         out.append((state, _check_duration(secs, f"schedule entry {entry!r}")))
     return out
+
+
+def speed_profile(rpm, spec, wobble, duration):
+    """The speed schedule of a run of ``duration`` s: ``spec`` ``"T0:RPM0,T1:RPM1,..."``
+    (seconds:rev/min, piecewise linear) or else the constant ``rpm``, times the wobble
+    ``"FRACTION:PERIOD"`` (1 + FRACTION·sin(2π t / PERIOD s)) when given. None when neither
+    is given (empty strings count as not given): the constant-speed simulator. ValueError
+    with the reason otherwise."""
+    if not spec and not wobble:
+        return None
+    profile = SpeedProfile.parse(spec) if spec else SpeedProfile.constant(rpm)
+    if wobble:
+        fraction, sep, period = wobble.partition(":")
+        try:
+            if not sep:
+                raise ValueError
+            fraction, period = float(fraction), float(period)
+        except ValueError:
+            raise ValueError(f"speed wobble {wobble!r} is not of the form FRACTION:PERIOD, e.g. 0.02:1.5") from None
+        profile = profile.with_wobble(fraction, period, duration)
+    return profile

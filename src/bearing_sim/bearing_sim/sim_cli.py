@@ -1,12 +1,16 @@
 """``bearing-sim``: run the 29-DOF simulator over a scenario or schedule, write an .npz.
 
     bearing-sim (--scenario NAME | --schedule SPEC) [--duration S] [--sample-rate HZ]
-                [--rpm RPM] [--noise-density X] [--variant V] [--seed N] --out FILE.npz
+                [--rpm RPM | --rpm-profile T0:RPM0,T1:RPM1,...] [--speed-wobble FRACTION:PERIOD]
+                [--noise-density X] [--variant V] [--seed N] --out FILE.npz
 
 The .npz holds ``t`` (s), ``accel`` (drive-end housing y acceleration, m/s^2),
 ``unbalance`` (physical unbalance force on the disk along +y, N), ``sample_rate``
 (Hz), ``rpm``, ``truth`` (per-sample FaultState integers) and ``source`` = ``simulator``
-(without it a .npz is read as a real machine's recording). Bad arguments
+(without it a .npz is read as a real machine's recording). With a changing speed
+(``--rpm-profile``, piecewise linear in seconds:rev/min from t = 0, held after its last
+point; ``--speed-wobble`` multiplies it by 1 + FRACTION·sin(2π t / PERIOD)) it also holds
+``shaft_speed`` (rad/s, one value per sample) and ``rpm`` is the mean speed. Bad arguments
 give one error line on stderr and exit status 2; a simulation failure exit 1.
 """
 
@@ -16,7 +20,7 @@ import sys
 import time
 
 from .model_parameters import DEFAULT_NOISE_DENSITY, VARIANTS
-from .schedule import DEFAULT_SEGMENT_DURATION, SCENARIOS, parse_schedule, scenario
+from .schedule import DEFAULT_SEGMENT_DURATION, SCENARIOS, parse_schedule, scenario, speed_profile
 
 
 class _Parser(argparse.ArgumentParser):
@@ -32,7 +36,13 @@ def build_parser():
     p.add_argument("--duration", type=float, default=DEFAULT_SEGMENT_DURATION,
                    help="seconds per scenario segment (default %(default)s)")
     p.add_argument("--sample-rate", type=float, default=48000.0, help="output rate, Hz (default %(default)s)")
-    p.add_argument("--rpm", type=float, default=1800.0, help="shaft speed, rev/min (default %(default)s)")
+    speed = p.add_mutually_exclusive_group()
+    speed.add_argument("--rpm", type=float, default=1800.0, help="shaft speed, rev/min (default %(default)s)")
+    speed.add_argument("--rpm-profile", metavar="T0:RPM0,T1:RPM1,...",
+                       help="changing speed, piecewise linear (seconds:rev/min), e.g. a run-up '0:900,10:1800'; "
+                            "the .npz then carries shaft_speed (rad/s per sample)")
+    p.add_argument("--speed-wobble", metavar="FRACTION:PERIOD",
+                   help="slow speed wobble: the speed times 1 + FRACTION*sin(2 pi t / PERIOD s), e.g. 0.02:1.5")
     p.add_argument("--noise-density", type=float, default=0.0,
                    help=f"white measurement noise, (m/s^2)/sqrt(Hz); 0 = off (default); "
                         f"{DEFAULT_NOISE_DENSITY:g} matches the real CWRU normal record")
@@ -65,8 +75,10 @@ def main(argv=None):
             schedule = scenario(args.scenario, args.duration)
         else:
             schedule = parse_schedule(args.schedule)
+        profile = speed_profile(args.rpm, args.rpm_profile, args.speed_wobble,
+                                sum(seconds for _, seconds in schedule))
         cfg = SimulationConfig(rpm=args.rpm, sample_rate=args.sample_rate, variant=args.variant,
-                               noise_density=args.noise_density, seed=args.seed)
+                               noise_density=args.noise_density, seed=args.seed, speed_profile=profile)
         _check_out_path(args.out)
         sim = Simulator(cfg, schedule)
     except ValueError as exc:
@@ -101,15 +113,18 @@ def main(argv=None):
     if show and tty:
         sys.stderr.write("\n")
     accel = np.concatenate([c.accel for c in parts])
+    fields = dict(t=np.arange(sim.total_samples) / sim.sample_rate,
+                  accel=accel,
+                  unbalance=np.concatenate([c.unbalance for c in parts]),
+                  sample_rate=np.float64(sim.sample_rate),
+                  rpm=np.float64(cfg.rpm),
+                  truth=np.concatenate([c.truth for c in parts]),
+                  source=np.str_("simulator"))
+    if profile is not None:
+        fields["shaft_speed"] = np.concatenate([c.shaft_speed for c in parts])
+        fields["rpm"] = np.float64(profile.mean_rpm(0.0, sim.duration))
     try:
-        np.savez(args.out,
-                 t=np.arange(sim.total_samples) / sim.sample_rate,
-                 accel=accel,
-                 unbalance=np.concatenate([c.unbalance for c in parts]),
-                 sample_rate=np.float64(sim.sample_rate),
-                 rpm=np.float64(cfg.rpm),
-                 truth=np.concatenate([c.truth for c in parts]),
-                 source=np.str_("simulator"))
+        np.savez(args.out, **fields)
     except OSError as exc:
         print(f"bearing-sim: error: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
         return 2

@@ -17,6 +17,26 @@ Everything that shapes the samples (piece boundaries, FIR windows, the noise
 stream) is defined on the absolute time/sample axis, so the output is
 bit-identical whatever the chunk sizes passed to :meth:`Simulator.advance`.
 Memory is bounded (one 5 ms piece plus the FIR history).
+
+Changing speed (``SimulationConfig.speed_profile``, a
+:class:`bearing_common.shaft_angle.SpeedProfile`): every angle of the model is its
+share of the shaft angle φ(t) = ∫ω dt — the cage angles κ·φ (κ = Ω_c/ω from the
+geometry, eq. 2.51), the unbalance phase φ + φ_μ — and the defect windows are
+placed on it (:mod:`defects` in the clock τ = φ/ω(0), the time a shaft at the
+initial speed would take; their switching times are mapped back through the exact
+inverse of φ). The compiled model takes one speed per integration call, so the
+calls are cut at the profile's knots and last at most Δ = √(8·tol/|α|) for the
+angular acceleration α (:data:`SPEED_ANGLE_TOL`); each runs at the call's mean
+speed with its angles re-anchored to the exact φ at its start. The angles are then
+exact at every call boundary and within α·Δ²/8 ≤ tol = 1e-6 rad in between
+(against the OR defect's 6e-3 rad width; Δ = 0.9 ms on a 900→1800 rev/min
+run-up over 10 s). The speed-dependent terms (centrifugal and Coriolis
+ball terms, gyroscopic disk, unbalance) follow ω² and ω, and the unbalance force
+has its tangential part μe·dω/dt too: for an accelerating shaft it is
+μe(ω² e_r + α e_t), a rotating force of magnitude μe·√(ω⁴ + α²) lagging the
+unbalance by atan(α/ω²) (9 % of the radial part on a 300 rev/min step over 50 ms;
+the ball rows' dω/dt terms cancel over the equally spaced balls and are left
+out). A constant speed (no profile) runs the code path of a fixed speed unchanged.
 """
 
 import dataclasses
@@ -25,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bearing_common.shaft_angle import RPM_TO_RAD_S, SpeedProfile
 from bearing_common.states import FaultState
 
 from .defects import inner_race_window, outer_race_window
@@ -36,6 +57,14 @@ from .model_parameters import (
     M_PER_INCH,
     N_BALLS_DE,
     N_PER_LBF,
+    P_MUE,
+    P_OMD,
+    P_OMI,
+    P_OMO,
+    P_PHIMU,
+    UNBALANCE_ECCENTRICITY,
+    UNBALANCE_MASS,
+    UNBALANCE_PHASE,
     VARIANTS,
     ModelParameters,
 )
@@ -47,6 +76,9 @@ MIN_SAMPLE_RATE = 4000.0  #: Hz: below this the BPFI harmonics and resonances ar
 MAX_SAMPLE_RATE = 1.0e6  #: Hz (the thesis' rate)
 MAX_RPM = 6000.0
 PIECE = 0.005  #: s, integration checkpoints (bounds memory and latency)
+#: rad: at changing speed an integration call (one speed) lasts at most Δ = √(8 tol / |dω/dt|),
+#: so that its angles stay within tol of ∫ω dt (Δ = 0.9 ms on a 900→1800 rev/min run-up in 10 s)
+SPEED_ANGLE_TOL = 1e-6
 _EPS_T = 1e-10  #: s, switching times closer than this to the current time are merged
 
 
@@ -66,6 +98,9 @@ class SimulationConfig:
         the default 1e-4 gives about 1e-4 relative RMS waveform error.
     max_step: largest integration step, s.
     *_defect_width / *_defect_depth: defect size, inch.
+    speed_profile: a :class:`~bearing_common.shaft_angle.SpeedProfile` (ω(t) from t = 0,
+        within (0, 6000] rev/min) for a changing speed; ``rpm`` is then not used.
+        None (default): the constant ``rpm``.
     """
 
     rpm: float = 1800.0
@@ -79,6 +114,7 @@ class SimulationConfig:
     or_defect_depth: float = DEFECT_DEPTH
     ir_defect_width: float = DEFECT_WIDTH
     ir_defect_depth: float = DEFECT_DEPTH
+    speed_profile: SpeedProfile | None = None
 
     def __post_init__(self):
         def num(name):
@@ -113,6 +149,17 @@ class SimulationConfig:
         for name in ("or_defect_width", "or_defect_depth", "ir_defect_width", "ir_defect_depth"):
             if not 0.0 <= num(name) < 0.05:
                 raise ValueError(f"{name} must be in [0, 0.05) inch, got {getattr(self, name)!r}")
+        if self.speed_profile is not None:
+            if not isinstance(self.speed_profile, SpeedProfile):
+                raise ValueError(f"speed_profile must be a SpeedProfile, got {self.speed_profile!r}")
+            top = float(self.speed_profile.omegas.max()) / RPM_TO_RAD_S
+            if top > MAX_RPM:
+                raise ValueError(f"speed profile reaches {top:g} rpm; the simulator supports up to {MAX_RPM:g}")
+
+    @property
+    def initial_rpm(self) -> float:
+        """Shaft speed at t = 0 (rev/min): the model's reference speed."""
+        return self.rpm if self.speed_profile is None else float(self.speed_profile.rpm(0.0))
 
 
 @dataclass
@@ -122,7 +169,8 @@ class SimChunk:
     start_index: index of the first sample; t0: its time (s);
     accel: drive-end housing y acceleration (m/s^2), float64 (n,);
     unbalance: physical unbalance force on the disk along +y (N), float64 (n,);
-    truth: fault state per sample (FaultState integers), int8 (n,).
+    truth: fault state per sample (FaultState integers), int8 (n,);
+    shaft_speed: shaft speed per sample (rad/s), float64 (n,).
     """
 
     start_index: int
@@ -130,6 +178,7 @@ class SimChunk:
     accel: np.ndarray
     unbalance: np.ndarray
     truth: np.ndarray
+    shaft_speed: np.ndarray
 
     def __len__(self):
         return len(self.accel)
@@ -144,8 +193,15 @@ class Simulator:
         self.config = config
         self.schedule = validate_schedule(schedule)
         self.params = ModelParameters.create(
-            config.variant, config.rpm, config.or_defect_width, config.or_defect_depth,
+            config.variant, config.initial_rpm, config.or_defect_width, config.or_defect_depth,
             config.ir_defect_width, config.ir_defect_depth)
+        profile = config.speed_profile
+        self._profile = None if profile is None or profile.is_constant else profile
+        self._speed_profile = None
+        if self._profile is not None:  # the balls' angles as shares of the shaft angle (eq. 2.51)
+            self._theta0 = self.params.theta0
+            self._kappa = np.where(np.arange(len(self._theta0)) < N_BALLS_DE, self.params.cage_speed_de,
+                                   self.params.cage_speed_fe) / self.params.shaft_speed
         self.sample_rate = float(config.sample_rate)
         ends = np.cumsum([d for _, d in self.schedule])
         self._bounds = ends  # segment end times, s
@@ -207,6 +263,23 @@ class Simulator:
         idx = np.searchsorted(self._bounds, t, side="right")
         return self._states[np.minimum(idx, len(self._states) - 1)]
 
+    @property
+    def speed_profile(self) -> SpeedProfile:
+        """The shaft speed over the run (a constant profile at constant speed)."""
+        if self._speed_profile is None:
+            self._speed_profile = self.config.speed_profile or SpeedProfile.constant(self.config.rpm)
+        return self._speed_profile
+
+    def shaft_speed(self, t):
+        """Shaft speed (rad/s) at time(s) t (s)."""
+        if self._profile is None:
+            return np.full(np.shape(t), self.params.shaft_speed)
+        return self._profile.omega(t)
+
+    def _clock(self, t):
+        """tau(t) = shaft angle / initial shaft speed (s): the defect windows' time axis."""
+        return t if self._profile is None else self._profile.angle(t) / self.params.shaft_speed
+
     # ------------------------------------------------------------ integration
     def _integrate_piece(self):
         t = self._t
@@ -218,6 +291,14 @@ class Simulator:
         idx = int(np.searchsorted(self._bounds, t + _EPS_T, side="right"))
         if idx < len(self._bounds):
             cands.append(float(self._bounds[idx]))
+        if self._profile is not None:
+            knots = self._profile.knots
+            k = int(np.searchsorted(knots, t + _EPS_T, side="right"))
+            if k < len(knots):
+                cands.append(float(knots[k]))
+            alpha = abs(float(self._profile.alpha(t + _EPS_T)))
+            if alpha > 0.0:
+                cands.append(t + math.sqrt(8.0 * SPEED_ANGLE_TOL / alpha))
         t_end = min(c for c in cands if c > t + _EPS_T)
         window = None
         if state == FaultState.OUTER_RACE:
@@ -229,7 +310,13 @@ class Simulator:
             sw = self._next_switch(window, t, t_end)
             if sw is not None:
                 t_end = sw
-            rel = window.relief(0.5 * (t + t_end))
+        if self._profile is None:
+            p, ct0, st0 = self._p, self._ct0, self._st0
+            mid = 0.5 * (t + t_end)
+        else:
+            p, ct0, st0, mid = self._call_speed(t, t_end)
+        if window is not None:
+            rel = window.relief(mid)
             if window is self._or:
                 or_rel = rel
             else:
@@ -237,7 +324,7 @@ class Simulator:
         n_max = int((t_end - self._n_fine_next * self._fine_dt) / self._fine_dt) + 3
         out = np.empty(max(n_max, 1))
         h, nw, ok = integrate_interval(
-            t, t_end, self._y, self._h, self.config.max_step, self._p, self._ct0, self._st0,
+            t, t_end, self._y, self._h, self.config.max_step, p, ct0, st0,
             or_rel, ir_rel, self._rtol, self._atol, self._fine_dt, self._n_fine_next, out,
             NDOF + DOF_HOUSING_Y_DE, self._stats, self._ctrl)
         if not ok:
@@ -247,16 +334,48 @@ class Simulator:
         self._n_fine_next += nw
         self._pending.append(out[:nw])
 
+    def _call_speed(self, t, t_end):
+        """(p, ct0, st0) of one integration call over [t, t_end] at changing speed, and the
+        clock tau at its middle (s).
+
+        The compiled model turns every angle at a constant rate from its packed speeds
+        and initial angles: here the call's mean speed (the exact angle turned over
+        the call), the ball angles and the unbalance phase shifted so that they are
+        the exact φ-shares at t (module docstring), and the unbalance amplitude and
+        lag that carry its tangential part μe·α.
+        """
+        prof, ref = self._profile, self.params.shaft_speed
+        mid = 0.5 * (t + t_end)
+        phi0, phi1, phi_mid = prof.angle(np.array([t, t_end, mid]))
+        w = (phi1 - phi0) / (t_end - t)  # mean shaft speed over the call, rad/s
+        alpha = float(prof.alpha(mid))
+        ratio = w / ref
+        p = self._p.copy()
+        p[P_OMI] *= ratio
+        p[P_OMO] *= ratio
+        p[P_OMD] = w
+        shift = phi0 - w * t  # rad of shaft angle: φ(t') = w t' + shift over the call
+        p[P_MUE] = UNBALANCE_MASS * UNBALANCE_ECCENTRICITY * math.hypot(w * w, alpha) / (w * w)
+        p[P_PHIMU] = UNBALANCE_PHASE + shift - math.atan2(alpha, w * w)
+        theta = self._theta0 + self._kappa * shift
+        return p, np.cos(theta), np.sin(theta), phi_mid / ref
+
     def _next_switch(self, window, t, t_end):
         """First switching time of ``window`` in (t + eps, t_end - eps], or None.
 
         The times are computed per 0.2 s span and cached (same formula, so the
-        same values whatever span they come from).
+        same values whatever span they come from); at changing speed on the clock
+        tau and mapped back to time.
         """
         lo, hi, times = self._sw_cache.get(id(window), (0.0, -1.0, None))
         if times is None or t < lo or t_end > hi:
             lo, hi = t, max(t_end, t + 0.2)
-            times = window.switch_times(lo, hi)
+            if self._profile is None:
+                times = window.switch_times(lo, hi)
+            else:
+                ref = self.params.shaft_speed
+                tau = window.switch_times(float(self._clock(lo)), float(self._clock(hi)))
+                times = self._profile.time_at_angle(tau * ref)
             self._sw_cache[id(window)] = (lo, hi, times)
         i = int(np.searchsorted(times, t + _EPS_T, side="right"))
         if i < len(times) and times[i] <= t_end - _EPS_T:
@@ -277,7 +396,7 @@ class Simulator:
         k0 = self.samples_done
         if n <= 0:
             e = np.empty(0)
-            return SimChunk(k0, k0 / self.sample_rate, e, e.copy(), np.empty(0, np.int8))
+            return SimChunk(k0, k0 / self.sample_rate, e, e.copy(), np.empty(0, np.int8), e.copy())
         D, c = self._D, self._c
         need = (k0 + n - 1) * D + c
         while self._fine_end() < need:
@@ -297,14 +416,27 @@ class Simulator:
         if self._noise_sigma > 0.0:
             accel += self._noise_sigma * self._rng.standard_normal(n)
         t = (k0 + np.arange(n)) / self.sample_rate
-        unbalance = self.params.unbalance_force_y(t) * N_PER_LBF
+        if self._profile is None:
+            unbalance = self.params.unbalance_force_y(t) * N_PER_LBF
+        else:
+            unbalance = self._unbalance_force_y(t) * N_PER_LBF
         truth = self.state_at(t).astype(np.int8)
         self.samples_done = k0 + n
-        return SimChunk(k0, k0 / self.sample_rate, accel, unbalance, truth)
+        return SimChunk(k0, k0 / self.sample_rate, accel, unbalance, truth, self.shaft_speed(t))
+
+    def _unbalance_force_y(self, t):
+        """Physical unbalance force on the disk along +y at changing speed (lbf):
+        mu e (w^2 sin(phi + phi_mu) - alpha cos(phi + phi_mu)), phi = the shaft angle."""
+        prof = self._profile
+        w, alpha = prof.omega(t), prof.alpha(t)
+        ph = prof.angle(t) + UNBALANCE_PHASE
+        return UNBALANCE_MASS * UNBALANCE_ECCENTRICITY * (w * w * np.sin(ph) - alpha * np.cos(ph))
 
 
 def simulate(config, schedule, chunk_seconds=0.05, progress=None):
-    """Run a whole schedule; returns dict(t, accel, unbalance, truth, sample_rate, rpm).
+    """Run a whole schedule; returns dict(t, accel, unbalance, truth, sample_rate, rpm), and
+    ``shaft_speed`` (rad/s per sample) when the config has a speed profile (``rpm`` is then
+    its mean over the run).
 
     ``progress(done, total)`` is called after every chunk when given.
     """
@@ -321,7 +453,7 @@ def simulate(config, schedule, chunk_seconds=0.05, progress=None):
         truth = np.concatenate([p.truth for p in parts])
     else:
         accel, unb, truth = np.empty(0), np.empty(0), np.empty(0, np.int8)
-    return {
+    out = {
         "t": np.arange(sim.total_samples) / sim.sample_rate,
         "accel": accel,
         "unbalance": unb,
@@ -329,3 +461,7 @@ def simulate(config, schedule, chunk_seconds=0.05, progress=None):
         "sample_rate": sim.sample_rate,
         "rpm": float(config.rpm),
     }
+    if config.speed_profile is not None:
+        out["shaft_speed"] = np.concatenate([p.shaft_speed for p in parts]) if parts else np.empty(0)
+        out["rpm"] = config.speed_profile.mean_rpm(0.0, sim.duration)
+    return out
