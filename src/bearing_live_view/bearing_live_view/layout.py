@@ -65,7 +65,7 @@ def motor_layout(namespace: str = "") -> fl.Layout:
                                        label=f"{h.label} lines, {speed} speed", color=c, show_line=False,
                                        line_style=style))
     envelope = _plot("envelope spectrum (x local median) and fault lines", lines, x_axis_val="currentCustom",
-                     x_axis_label="Hz")
+                     x_axis_path=fl.PlotXAxisPath(value=f"{spectrum}.frequency[:]"), x_axis_label="Hz")
     waveform = _plot("vibration per block (m/s^2)", [
         fl.PlotSeries(value=f"{vibration}.{k}", label=k) for k in ("max", "min", "rms")])
     condition = _plot("condition: indicators / baseline", [
