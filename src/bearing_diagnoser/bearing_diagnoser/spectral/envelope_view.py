@@ -22,7 +22,7 @@ class EnvelopeView:
 
     ``end``: sample index after the window's last sample (the decision's index domain); ``length``:
     samples in the window; ``ses``: the normalised SES (:func:`.envelope_spectrum.normalise`, median
-    ≈ 1 on noise), bin k at k·``bin_width`` Hz, read-only; ``band``: the demodulation band (Hz);
+    ≈ 1 on noise), bin k at k·``bin_width`` Hz (the decision's own array: not to be modified); ``band``: the demodulation band (Hz);
     ``f_top``: the highest comb line tested (Hz; the tested range is [0, f_top]); ``shaft_hz``: the
     shaft rate the window was tested at and ``shaft_source`` where it came from (``"told"``,
     ``"refined"``, ``"measured"``, ``"estimated"``); ``told_hz``: the told rate (None: none told);
