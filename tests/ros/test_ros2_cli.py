@@ -306,6 +306,7 @@ def test_monitor_launch_with_foxglove_serves_the_graph_on_port_8765(install, she
     launch = shell.start("launch", f"ros2 launch bearing_bringup monitor.launch.py params_file:={params} "
                                    "foxglove:=true")
     shell.wait_for_line(launch, "serving the graph to Foxglove on ws://127.0.0.1:8765", 180.0)
+    shell.wait_for_line(launch, FAULT_SEEN, 300.0)  # the graph runs: every node started (numba: first run)
     wanted = [topics.qualified("", t) for t in (topics.FAULT_STATE, topics.HEALTH, topics.DIAGNOSTICS,
                                                 topics.ENVELOPE_SPECTRUM)]
     state, health, diagnostics, spectrum = wanted
