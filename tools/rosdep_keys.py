@@ -43,6 +43,8 @@ PYPI_ONLY = {
                        "24.04 (Jazzy); it also pulls llvmlite, pinned with it"),
     "control": ("control", "no rosdep key for python-control"),
     "rosbags": ("rosbags", "no rosdep key; reads and writes rosbag2 without a ROS 2 install"),
+    "foxglove": ("foxglove-sdk", "no rosdep key for Foxglove's Python SDK (ROS releases its C++ foxglove_bridge "
+                                 "only); the live view's WebSocket server"),
 }
 
 #: Distributions installed with a PyPI_ONLY one because its pin needs theirs (numba -> llvmlite).

@@ -25,6 +25,8 @@ import time
 import pytest
 import yaml
 from cpu_load import group_pids, native_stacks, one_core, starved
+from foxglove_client import FoxgloveClient
+from mcap_ros2._dynamic import generate_dynamic
 from ros_harness import REPO_ROOT, session_domain_id
 from test_bag_record_play import write_play_bag
 
@@ -46,6 +48,7 @@ NODE_RUNS = {
     ("bearing_observer", "observer"): ("--ros-args -p fault_type:=inner_race", ["/ir_observer"]),
     ("bearing_diagnoser", "diagnoser"): ("", ["/diagnoser"]),
     ("bearing_fleet", "fleet"): ("", ["/fleet"]),
+    ("bearing_live_view", "live_view"): ("--ros-args -p port:=0", ["/live_view"]),  # any free port
     ("bearing_bringup", "nodes"): ("/cell_9/or_observer /cell_9/diagnoser",
                                    ["/cell_9/or_observer", "/cell_9/diagnoser"]),
 }
@@ -152,10 +155,14 @@ def share(install, package: str) -> pathlib.Path:
     return install.root / "ros_ws" / "install" / package / "share" / package
 
 
-def monitor_params(install, tmp_path, schedule: str) -> pathlib.Path:
-    """config/monitor.yaml as installed, the simulator on ``schedule`` (e.g. an outer-race fault for 10 min)."""
+def monitor_params(install, tmp_path, schedule: str, model_set: str = "") -> pathlib.Path:
+    """config/monitor.yaml as installed, the simulator on ``schedule`` (e.g. an outer-race fault for 10 min);
+    ``model_set``: the observers' and the diagnoser's (default: as installed)."""
     params = yaml.safe_load((share(install, "bearing_bringup") / "config" / "monitor.yaml").read_text())
     params["simulator"]["ros__parameters"].update(schedule=schedule, scenario="")
+    for node in ("or_observer", "ir_observer", "diagnoser"):
+        if model_set:
+            params[node]["ros__parameters"]["model_set"] = model_set
     path = tmp_path / "monitor.yaml"
     path.write_text(yaml.safe_dump(params))
     return path
@@ -296,6 +303,38 @@ def test_monitor_launch_echo_node_param_and_ctrl_c_under_load(install, shell, tm
     assert "Double value is: 1.0" in shell.ok("ros2 param get /diagnoser diagnostics_period")
 
     saturated_ctrl_c(launch)
+
+
+def test_monitor_launch_with_foxglove_serves_the_graph_on_port_8765(install, shell, tmp_path):
+    """`ros2 launch bearing_bringup monitor.launch.py foxglove:=true` on an outer-race fault, deciding with
+    the spectral front end (model set none: the simulator sets' fold draws no spectrum): a WebSocket
+    client on port 8765 subscribes to the fault state, health, /diagnostics and the envelope spectrum
+    and decodes them; Ctrl-C ends every process, the live view too, cleanly."""
+    params = monitor_params(install, tmp_path, "outer_race:600", model_set="none")
+    launch = shell.start("launch", f"ros2 launch bearing_bringup monitor.launch.py params_file:={params} "
+                                   "foxglove:=true")
+    shell.wait_for_line(launch, "serving the graph to Foxglove on ws://127.0.0.1:8765", 180.0)
+    shell.wait_for_line(launch, FAULT_SEEN, 300.0)  # the graph runs: every node started (numba: first run)
+    wanted = [topics.qualified("", t) for t in (topics.FAULT_STATE, topics.HEALTH, topics.DIAGNOSTICS,
+                                                topics.ENVELOPE_SPECTRUM)]
+    state, health, diagnostics, spectrum = wanted
+    client = FoxgloveClient(8765, on_timeout=lambda: tail(launch))
+    try:
+        client.wait_for(lambda: set(wanted) <= set(client.channels), 120.0, "the channels advertised")
+        client.subscribe(wanted)
+        client.wait_for(lambda: all(client.messages.get(t) for t in wanted) and any(
+            s["state_name"] == "OUTER_RACE" for s in client.json_messages(state)), 180.0, "an outer-race fault")
+    finally:
+        client.close()
+    assert client.json_messages(state)[-1]["state_name"] == "OUTER_RACE"
+    assert client.json_messages(health)[-1]["rms"] > 0.0
+    last = client.json_messages(spectrum)[-1]
+    assert 0 < len(last["frequency"]) == len(last["magnitude"]) <= 100 and "outer_race" in last["lines"]
+    schema = client.channels[diagnostics]
+    decode = generate_dynamic(schema["schemaName"], schema["schema"])[schema["schemaName"]]
+    statuses = [s for _, data in client.messages[diagnostics] for s in decode(data).status]
+    assert any(s.name.startswith("bearing_monitor/") for s in statuses), statuses
+    ctrl_c(launch)
 
 
 def test_fleet_launch_echo_fleet_state_and_ctrl_c(install, shell, tmp_path):

@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from bearing_bringup.fleet_plan import load_fleet, parameters_file, processes
-from bearing_bringup.graph import CONFIG_NAME, FLEET_CONFIG_NAME, GRAPH
+from bearing_bringup.graph import CONFIG_NAME, FLEET_CONFIG_NAME, GRAPH, LIVE_VIEW
 from bearing_bringup.restart_policy import MAX_RESTARTS, RESTART_DELAY_S
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
@@ -63,6 +63,11 @@ class OpaqueFunction(Recorded):
         super().__init__(function=function, args=args, kwargs=kwargs)
 
 
+class IfCondition(Recorded):
+    def __init__(self, predicate_expression):
+        super().__init__(predicate_expression=predicate_expression)
+
+
 class LaunchConfiguration(Recorded):
     def __init__(self, variable_name, *, default=None):
         super().__init__(variable_name=variable_name, default=default)
@@ -92,6 +97,7 @@ def stand_in_modules(share: pathlib.Path) -> dict:
         "launch": module("launch", LaunchDescription=LaunchDescription),
         "launch.actions": module("launch.actions", DeclareLaunchArgument=DeclareLaunchArgument, Shutdown=Shutdown,
                                  OpaqueFunction=OpaqueFunction),
+        "launch.conditions": module("launch.conditions", IfCondition=IfCondition),
         "launch.substitutions": module("launch.substitutions", LaunchConfiguration=LaunchConfiguration),
         "launch_ros": module("launch_ros"),
         "launch_ros.actions": module("launch_ros.actions", Node=Node),
@@ -115,17 +121,22 @@ def description(monkeypatch):
     return launch_description(monkeypatch, LAUNCH_FILE)
 
 
+def graph_nodes(entities) -> list:
+    """The Node actions of the monitoring graph (the live view's aside)."""
+    return [e.kwargs for e in entities if isinstance(e, Node) and e.kwargs["executable"] != LIVE_VIEW.executable]
+
+
 def test_launch_arguments(description):
     args = {e.kwargs["name"]: e.kwargs for e in description.kwargs["initial_entities"]
             if isinstance(e, DeclareLaunchArgument)}
-    assert set(args) == {"params_file", "namespace"}
+    assert set(args) == {"params_file", "namespace", "foxglove", "foxglove_port", "foxglove_host"}
     assert args["params_file"]["default_value"] == str(BRINGUP / "config" / CONFIG_NAME)
     assert pathlib.Path(args["params_file"]["default_value"]).is_file()
     assert args["namespace"]["default_value"] == ""
 
 
 def test_one_node_per_graph_entry_with_the_shared_parameters_and_namespace(description):
-    nodes = [e.kwargs for e in description.kwargs["initial_entities"] if isinstance(e, Node)]
+    nodes = graph_nodes(description.kwargs["initial_entities"])
     assert [(n["package"], n["executable"], n["name"]) for n in nodes] == \
         [(s.package, s.executable, s.name) for s in GRAPH]
     for node in nodes:
@@ -135,7 +146,7 @@ def test_one_node_per_graph_entry_with_the_shared_parameters_and_namespace(descr
 
 
 def test_simulator_ends_the_launch_and_the_others_are_respawned(description):
-    nodes = {e.kwargs["name"]: e.kwargs for e in description.kwargs["initial_entities"] if isinstance(e, Node)}
+    nodes = {n["name"]: n for n in graph_nodes(description.kwargs["initial_entities"])}
     sim = nodes.pop("simulator")
     assert isinstance(sim["on_exit"], Shutdown) and not sim.get("respawn")
     assert set(nodes) == {"or_observer", "ir_observer", "diagnoser"}
@@ -183,7 +194,8 @@ def test_fleet_launch_starts_the_processes_bearing_graph_runs(monkeypatch, tmp_p
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
     entities = launch_description(monkeypatch, FLEET_LAUNCH_FILE).kwargs["initial_entities"]
     args = {e.kwargs["name"]: e.kwargs for e in entities if isinstance(e, DeclareLaunchArgument)}
-    assert set(args) == {"fleet_file", "motors"} and args["motors"]["default_value"] == ""
+    assert set(args) == {"fleet_file", "motors", "foxglove", "foxglove_port", "foxglove_host"}
+    assert args["motors"]["default_value"] == ""
     fleet_file = pathlib.Path(args["fleet_file"]["default_value"])
     assert fleet_file == BRINGUP / "config" / FLEET_CONFIG_NAME and fleet_file.is_file()
     (opaque,) = [e for e in entities if isinstance(e, OpaqueFunction)]
@@ -202,3 +214,23 @@ def test_fleet_launch_starts_the_processes_bearing_graph_runs(monkeypatch, tmp_p
             assert not node.get("respawn") and "on_exit" not in node
         else:
             assert node["respawn"] is True and node["respawn_delay"] == RESTART_DELAY_S
+
+
+@pytest.mark.parametrize("path", [LAUNCH_FILE, FLEET_LAUNCH_FILE], ids=["monitor", "fleet"])
+def test_foxglove_true_starts_the_live_view_on_foxglove_port(monkeypatch, path):
+    """``foxglove:=true`` (default false) starts one live_view node, respawned like the monitoring nodes,
+    with the port and host of ``foxglove_port`` / ``foxglove_host``, whose defaults are the node's own."""
+    entities = launch_description(monkeypatch, path).kwargs["initial_entities"]
+    args = {e.kwargs["name"]: e.kwargs["default_value"] for e in entities if isinstance(e, DeclareLaunchArgument)}
+    declared = {p.name: p.default for p in importlib.import_module(LIVE_VIEW.parameters_module).PARAMETERS}
+    assert args["foxglove"] == "false"
+    assert yaml.safe_load(args["foxglove_port"]) == declared["port"] == 8765  # launch_ros reads values as YAML
+    assert yaml.safe_load(args["foxglove_host"]) == declared["host"]
+    (live,) = [e.kwargs for e in entities if isinstance(e, Node) and e.kwargs["executable"] == LIVE_VIEW.executable]
+    assert (live["package"], live["name"]) == (LIVE_VIEW.package, LIVE_VIEW.name)
+    assert live["condition"] == IfCondition(LaunchConfiguration("foxglove"))
+    assert live["parameters"] == [{"port": LaunchConfiguration("foxglove_port"),
+                                   "host": LaunchConfiguration("foxglove_host")}]
+    assert set(live["parameters"][0]) <= set(declared)
+    assert live["respawn"] is True and live["respawn_delay"] == RESTART_DELAY_S
+    assert LIVE_VIEW.executable in console_scripts(LIVE_VIEW.package)

@@ -9,6 +9,7 @@ import pathlib
 from dataclasses import dataclass
 
 from bearing_common import ros_env
+from bearing_live_view.live_view_node_config import DEFAULT_HOST, DEFAULT_PORT
 
 
 @dataclass(frozen=True)
@@ -42,6 +43,20 @@ GRAPH = (
 #: The fleet's summary node (one per machine, root namespace): every motor's fault_state -> fleet_state.
 FLEET_NODE = NodeSpec("bearing_fleet", "fleet", "fleet", "bearing_fleet.fleet_node_config")
 
+#: The live view (``foxglove:=true``, ``bearing-graph --foxglove``): every topic it discovers, served to Foxglove.
+LIVE_VIEW = NodeSpec("bearing_live_view", "live_view", "live_view", "bearing_live_view.live_view_node_config")
+
+#: The launch files' live-view arguments: (name, default, description); ``foxglove`` starts it.
+LIVE_VIEW_ARGUMENTS = (
+    ("foxglove", "false", "true: also serve the graph to Foxglove (the live_view node, docs/live-view.md)"),
+    ("foxglove_port", str(DEFAULT_PORT), "TCP port of the Foxglove WebSocket server"),
+    ("foxglove_host", DEFAULT_HOST, "address it listens on: 127.0.0.1 this machine only, 0.0.0.0 every interface "
+                                   "(no authentication)"),
+)
+
+#: The live view's parameters from those arguments: {parameter: launch argument}.
+LIVE_VIEW_PARAMETERS = {"port": "foxglove_port", "host": "foxglove_host"}
+
 
 @dataclass(frozen=True)
 class Process:
@@ -50,7 +65,8 @@ class Process:
     A single node (``node_name`` in ``namespace``, the package's own executable) or several
     (``bearing_bringup nodes`` with ``arguments`` = their fully qualified names); ``remappings``
     are global ``(from, to)`` rules with absolute ``from`` names, so each hits one motor only.
-    ``sensor``: a simulator, whose exit 0 means its scenario ended.
+    ``sensor``: a simulator, whose exit 0 means its scenario ended. ``parameters``: ``(name, value)``
+    set on its command line, after the parameters file.
     """
 
     name: str
@@ -61,6 +77,7 @@ class Process:
     arguments: tuple = ()
     remappings: tuple = ()
     sensor: bool = False
+    parameters: tuple = ()
 
     def ros_arguments(self, params_file) -> list:
         """The ``--ros-args`` part of its command line."""
@@ -72,6 +89,8 @@ class Process:
         args += ["--params-file", str(params_file)]
         for source, target in self.remappings:
             args += ["-r", f"{source}:={target}"]
+        for name, value in self.parameters:
+            args += ["-p", f"{name}:={value}"]
         return args
 
 
@@ -80,6 +99,12 @@ def single_graph(namespace: str = "") -> list:
     ns = namespace.strip("/")
     return [Process(spec.name, spec.package, spec.executable, spec.name, ns, sensor=spec.name == "simulator")
             for spec in GRAPH]
+
+
+def live_view(namespace: str, port: int, host: str) -> Process:
+    """The live view's process for ``bearing-graph --foxglove``: serving on ``host``:``port``."""
+    return Process(LIVE_VIEW.name, LIVE_VIEW.package, LIVE_VIEW.executable, LIVE_VIEW.name, namespace.strip("/"),
+                   parameters=(("port", int(port)), ("host", host)))
 
 
 CONFIG_NAME = "monitor.yaml"

@@ -15,6 +15,9 @@ the restart policy applies per process, the run ends when every simulator has en
 scenario (without simulators: on Ctrl-C or ``--timeout``), and the summary has one table
 per simulated motor (``--out``/<motor>/ holds its summary and plot).
 
+With ``--foxglove [PORT]`` it also runs the live view (the ``live_view`` node, one for a fleet too),
+serving the graph to Foxglove on PORT (default 8765), as the launch files' ``foxglove:=true`` does.
+
 Exit 0 only when every node of the graph ran and the scenario completed; when
 parts are missing it runs what exists, names what is missing and exits 3; an
 unusable fleet file gives one line on stderr and exit 2.
@@ -38,7 +41,7 @@ from bearing_common import ros_env, topics
 from bearing_common.stop_signals import StopSignals
 
 from .fleet_plan import FleetError, default_fleet_file, load_fleet, parameters_file, processes
-from .graph import CONFIG_NAME, config_path, single_graph
+from .graph import CONFIG_NAME, DEFAULT_HOST, DEFAULT_PORT, config_path, live_view, single_graph
 from .process_group import ProcessGroup
 from .restart_policy import MAX_RESTARTS, RESTART_DELAY_S, RestartPolicy
 from .state_report import evaluate, format_table
@@ -119,6 +122,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "the installed fleet.yaml)")
     parser.add_argument("--motors", type=int, help="run N motors: the fleet file's first N, then motor_<k> on its "
                         "defaults")
+    parser.add_argument("--foxglove", type=int, nargs="?", const=DEFAULT_PORT, metavar="PORT",
+                        help=f"also serve the graph to Foxglove on PORT (default {DEFAULT_PORT}): the live_view node "
+                             "(docs/live-view.md)")
+    parser.add_argument("--foxglove-host", default=DEFAULT_HOST, metavar="ADDRESS",
+                        help=f"address the live view listens on (default {DEFAULT_HOST}: this machine only; 0.0.0.0: "
+                             "every interface, no authentication)")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/demo"),
                         help="summary and plots directory")
     parser.add_argument("--timeout", type=float, default=600.0, help="stop after this many wall seconds")
@@ -134,14 +143,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 def plan_run(args) -> RunPlan:
     """The fleet of ``--fleet`` / ``--motors`` (its parameters written to ``--out``), else one
-    graph in ``--namespace``; raises FleetError for an unusable fleet file."""
+    graph in ``--namespace``; with ``--foxglove`` the live view too (root namespace for a fleet);
+    raises FleetError for an unusable fleet file."""
     if args.fleet or args.motors is not None:
         fleet = load_fleet(args.fleet or default_fleet_file(), args.motors, args.params)
         args.out.mkdir(parents=True, exist_ok=True)
         params_file = args.out / FLEET_PARAMS
         params_file.write_text(yaml.safe_dump(parameters_file(fleet), sort_keys=False))
-        return RunPlan(processes(fleet), params_file, [m.name for m in fleet.motors], fleet)
-    return RunPlan(single_graph(args.namespace), args.params or config_path(), [args.namespace])
+        plan = RunPlan(processes(fleet), params_file, [m.name for m in fleet.motors], fleet)
+    else:
+        plan = RunPlan(single_graph(args.namespace), args.params or config_path(), [args.namespace])
+    if args.foxglove is not None:
+        plan.procs.append(live_view("" if plan.fleet else args.namespace, args.foxglove, args.foxglove_host))
+    return plan
 
 
 def main(argv=None) -> int:

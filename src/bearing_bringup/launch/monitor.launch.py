@@ -1,11 +1,13 @@
 """Start the whole monitoring graph from one parameters YAML (full ROS 2 installs).
 
     ros2 launch bearing_bringup monitor.launch.py [params_file:=FILE] [namespace:=NS]
+        [foxglove:=true [foxglove_port:=8765] [foxglove_host:=127.0.0.1]]
 
 The node list is bearing_bringup.graph.GRAPH, the same one `make demo` runs. When the
 simulator exits (its scenario ended, repeat: false) the whole launch shuts down; the
 observers and the diagnoser are respawned when they die, as bearing-graph restarts them
-(same delay; launch caps the respawns per node in total, not per minute).
+(same delay; launch caps the respawns per node in total, not per minute). With ``foxglove:=true``
+the live_view node serves the graph to Foxglove (docs/live-view.md), respawned likewise.
 """
 
 import os
@@ -13,10 +15,11 @@ import os
 from ament_index_python.packages import get_package_share_directory
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, Shutdown
+from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
-from bearing_bringup.graph import CONFIG_NAME, GRAPH
+from bearing_bringup.graph import CONFIG_NAME, GRAPH, LIVE_VIEW, LIVE_VIEW_ARGUMENTS, LIVE_VIEW_PARAMETERS
 from bearing_bringup.launch_ctrl_c import hear_ctrl_c
 from bearing_bringup.restart_policy import MAX_RESTARTS, RESTART_DELAY_S
 
@@ -50,5 +53,10 @@ def generate_launch_description():
                               description="parameters YAML for all nodes"),
         DeclareLaunchArgument("namespace", default_value="",
                               description="namespace of this machine's topics, e.g. motor_7"),
+        *(DeclareLaunchArgument(name, default_value=default, description=text)
+          for name, default, text in LIVE_VIEW_ARGUMENTS),
         *nodes,
+        Node(package=LIVE_VIEW.package, executable=LIVE_VIEW.executable, name=LIVE_VIEW.name, namespace=namespace,
+             parameters=[{p: LaunchConfiguration(a) for p, a in LIVE_VIEW_PARAMETERS.items()}], output="screen",
+             condition=IfCondition(LaunchConfiguration("foxglove")), **lifecycle(LIVE_VIEW)),
     ])

@@ -28,6 +28,8 @@ QoS, chosen on purpose:
   echo`` gets the current condition at once, with the recent trend to draw: the last minute
   of a stream (about 1 Hz) or the last hour of one-a-minute snapshots; reliable because the
   messages are few and small and each carries a state change's time;
+* ``envelope_spectrum``: reliable, transient local, keep last 1 — a plot that joins late (Foxglove's
+  live view, PlotJuggler) gets the current spectrum at once; only the latest is worth drawing;
 * ``/diagnostics``: the ROS default (reliable, volatile, keep last 10), as
   ``diagnostic_aggregator`` expects.
 
@@ -74,6 +76,7 @@ RESIDUAL_INNER_RACE = Topic("residual/inner_race", "bearing_msgs/msg/Residual", 
 FAULT_STATE = Topic("fault_state", "bearing_msgs/msg/FaultState", 10, latched=True)
 FLEET_STATE = Topic("fleet_state", "bearing_msgs/msg/FleetState", 1, latched=True)
 HEALTH = Topic("health", "bearing_msgs/msg/HealthIndicators", 60, latched=True)
+ENVELOPE_SPECTRUM = Topic("envelope_spectrum", "bearing_msgs/msg/EnvelopeSpectrum", 1, latched=True)
 DIAGNOSTICS = Topic("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", 10)
 CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock", 10)
 
@@ -83,7 +86,7 @@ RESIDUALS = {FaultState.OUTER_RACE: RESIDUAL_OUTER_RACE, FaultState.INNER_RACE: 
 #: Every topic of one machine's graph, in the order recorders list them.
 GRAPH_TOPICS: dict[str, Topic] = {t.name: t for t in (
     VIBRATION, UNBALANCE, SHAFT_SPEED, TACHOMETER, TRUTH, RESIDUAL_OUTER_RACE, RESIDUAL_INNER_RACE, FAULT_STATE, HEALTH,
-    DIAGNOSTICS)}
+    ENVELOPE_SPECTRUM, DIAGNOSTICS)}
 
 
 def residual_topic(fault) -> Topic:

@@ -153,6 +153,11 @@ class Diagnoser:
             st.push(int(first_sample_index), y, r, u)
         return self._decide(front.push(h, int(first_sample_index), y, self._streams, self.expected, snapshot))
 
+    def envelope_view(self):
+        """The front end's spectrum of the last window it tested (:meth:`.decision.front_end.FrontEnd.envelope_view`),
+        or None (none yet; the fold front end computes none)."""
+        return None if self._front is None else self._front.envelope_view()
+
     def flush(self) -> list[Decision]:
         """Decide every complete window with whatever streams exist (end of data)."""
         if self._front is None:

@@ -13,6 +13,8 @@ What the node does between ROS and the decision core:
 * condition: the measurement y = r + ŷ goes to :class:`.health.health_session.HealthSession`
   (indicators and trend per 1 s window of a stream or per snapshot, with the decision's comb
   evidence), drained by :meth:`DiagnoserSession.take_health` (the ``health`` topic);
+* the spectrum the spectral decision tested in its last window, for plotting, from
+  :meth:`DiagnoserSession.take_envelope` (the ``envelope_spectrum`` topic);
 * restart rule: the decision core (:class:`.diagnoser.Diagnoser`) restarts when a stream that
   already fed it restarts (a restarted observer or sensor: index back to 0, a new rate) —
   its stream is then a new one —, when the residuals name another model set (observers
@@ -142,6 +144,7 @@ class DiagnoserSession:
                         for h in STREAMS}
         self.condition = HealthSession(health_settings(values), log, keep_history)
         self._health_out: list[HealthRecord] = []
+        self._envelope_taken = None  # the last spectrum handed out by take_envelope
         self.last_health: HealthRecord | None = None
         self.snapshots = False  # whether the last accepted chunk was a snapshot sensor's
         self._snapshot_arrivals = {h: deque(maxlen=2) for h in STREAMS}  # node times of the last snapshots
@@ -323,6 +326,17 @@ class DiagnoserSession:
         if records:
             self._health_out.extend(records)
             self.last_health = records[-1]
+
+    def take_envelope(self):
+        """``(stamp s, view)``: the spectrum the decision tested in its last window
+        (:class:`.spectral.envelope_view.EnvelopeView`, the ``envelope_spectrum`` topic) and the stamp
+        of that window's end, when it is new since the last call; else None (none new, or a front end
+        that computes none)."""
+        view = None if self.core is None else self.core.envelope_view()
+        if view is None or view is self._envelope_taken:
+            return None
+        self._envelope_taken = view
+        return self.time_offset + view.end / view.sample_rate, view
 
     def take_health(self) -> list[HealthRecord]:
         """The condition records completed since the last call (oldest first), for the ``health`` topic."""

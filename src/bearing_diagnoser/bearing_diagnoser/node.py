@@ -9,7 +9,11 @@ a last STALE "stopped" when the node ends; the condition trend and its indicator
 key-values, a condition WARNING at least WARN, an ALARM ERROR), and ``health``
 (HealthIndicators, reliable + transient local, keep last 60: condition indicators, ISO
 20816-3 zone, trend state with since-time and slope, the fault-comb evidence per hypothesis;
-one per ``health_period`` s of a stream, one per snapshot of a snapshot sensor). Signal timing
+one per ``health_period`` s of a stream, one per snapshot of a snapshot sensor), and
+``envelope_spectrum`` (EnvelopeSpectrum, reliable + transient local, keep last 1: the spectrum the
+spectral decision tested in its last window, max-held to at most 100 values, with each hypothesis'
+line frequencies at the told and the measured speed; the fold front end of the simulator model
+sets publishes none). Signal timing
 comes from the residuals' stamps and sample indices only, so replays at any rate (with ``use_sim_time``) give the same
 decisions. The logic lives in :class:`.diagnoser_session.DiagnoserSession`; this module only wires
 ROS to it.
@@ -25,12 +29,13 @@ from bearing_common.node_main import run_node_main
 from bearing_common.parameters import declare
 from bearing_common.stamps import to_seconds, to_stamp
 from bearing_common.states import FaultState
+from bearing_msgs.msg import EnvelopeSpectrum, FaultLines, HealthIndicators, Residual, ShaftSpeed
 from bearing_msgs.msg import FaultState as FaultStateMsg
-from bearing_msgs.msg import HealthIndicators, Residual, ShaftSpeed
 
 from .diagnoser_node_config import PARAMETERS
 from .diagnoser_session import SENSOR_LOCATION, DiagnoserSession, Health, StateReport, motor_name, status_name
 from .health.message import fill_health_message
+from .spectrum_message import fill_spectrum_message
 
 
 class DiagnoserNode(Node):
@@ -45,6 +50,8 @@ class DiagnoserNode(Node):
         self.pub_state = self.create_publisher(FaultStateMsg, topics.FAULT_STATE.name, topics.qos(topics.FAULT_STATE))
         self.pub_diag = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS.name, topics.qos(topics.DIAGNOSTICS))
         self.pub_health = self.create_publisher(HealthIndicators, topics.HEALTH.name, topics.qos(topics.HEALTH))
+        self.pub_spectrum = self.create_publisher(EnvelopeSpectrum, topics.ENVELOPE_SPECTRUM.name,
+                                                  topics.qos(topics.ENVELOPE_SPECTRUM))
         self.residual_subscriptions = {
             h: self.create_subscription(Residual, topic.name, lambda msg, h=h: self.on_residual(h, msg),
                                         topics.qos(topic))
@@ -75,6 +82,10 @@ class DiagnoserNode(Node):
         for record in self.session.take_health():
             self.pub_health.publish(fill_health_message(HealthIndicators(), record, self.session.condition.monitor,
                                                         msg.header.frame_id or SENSOR_LOCATION))
+        envelope = self.session.take_envelope()
+        if envelope is not None:
+            self.pub_spectrum.publish(fill_spectrum_message(EnvelopeSpectrum(), envelope[1], envelope[0],
+                                                            msg.header.frame_id or SENSOR_LOCATION, FaultLines))
 
     def publish_state(self, report: StateReport) -> None:
         msg = FaultStateMsg(state=int(report.state), confidence=float(report.confidence),

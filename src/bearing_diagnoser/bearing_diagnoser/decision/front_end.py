@@ -80,3 +80,8 @@ class FrontEnd(Protocol):
 
     def flush(self, streams: dict[FaultState, StreamBlocks], expected: set) -> list[WindowVerdict]:
         """End of data: decide what can still be decided."""
+
+    def envelope_view(self):
+        """The spectrum the last window was decided on, for plotting
+        (:class:`bearing_diagnoser.spectral.envelope_view.EnvelopeView`), or None: none yet, or the
+        front end computes none."""

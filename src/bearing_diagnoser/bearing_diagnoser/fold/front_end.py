@@ -87,6 +87,10 @@ class FoldFrontEnd:
         """Decide every complete window with whatever streams exist."""
         return self._run(streams, expected, final=True)
 
+    def envelope_view(self) -> None:
+        """None: the fold folds an energy envelope at the fault periods, it computes no spectrum to plot."""
+        return None
+
     def _run(self, streams: dict[FaultState, StreamBlocks], expected: set, final: bool = False) -> list[WindowVerdict]:
         out: list[WindowVerdict] = []
         if not streams:

@@ -59,6 +59,7 @@ from ..decision.sensor_health import SensorCheck, check_window
 from .accumulation import CombGeometry, LongHorizon
 from .band_choice import BandChoice, choose_band, live_bands
 from .envelope_spectrum import band_ses, normalise, window_spectrum
+from .envelope_view import EnvelopeView
 from .fault_combs import (
     CombEvidence,
     comb_evidence,
@@ -136,6 +137,7 @@ class EvidenceStream:
         self.long = LongHorizon(settings.max_windows, settings.mask_shaft, settings.band_criterion) \
             if settings.accumulate else None
         self._long_evidence: dict = {}
+        self.envelope: EnvelopeView | None = None  # the last window's spectrum as tested (:mod:`.envelope_view`)
 
     @property
     def retained_from(self) -> int:
@@ -321,7 +323,7 @@ class EvidenceStream:
             return None if sensor.ok else WindowEvidence(end - self.window, end, {}, self.band, fr, sigma, source,
                                                          sensor)
         spectrum = window_spectrum(x, s.prewhiten)
-        evidence = self._evidence(spectrum, x.size, self.band, self.terms, self.f_top, fr)
+        evidence = self._evidence(spectrum, x.size, self.band, self.terms, self.f_top, fr, end)
         told = self._told[0] if self._told else None
         if self.long is None:
             return WindowEvidence(end - self.window, end, evidence, self.band, fr, sigma, source, sensor, told)
@@ -331,9 +333,10 @@ class EvidenceStream:
                               self._long_evidence, self.long.start or 0, self.long.windows)
 
     def _evidence(self, spectrum: np.ndarray, n: int, band: BandChoice, terms: dict, f_top: float,
-                  fr: float) -> dict:
-        """{hypothesis: CombEvidence} of one window's spectrum (its rfft, ``n`` samples) in ``band``, for
-        the combs ``terms`` up to ``f_top`` (Hz) at shaft rate ``fr`` (Hz)."""
+                  fr: float, end: int) -> dict:
+        """{hypothesis: CombEvidence} of the window's spectrum (its rfft, ``n`` samples to index ``end``) in
+        ``band``, for the combs ``terms`` up to ``f_top`` (Hz) at shaft rate ``fr`` (Hz); kept as
+        :attr:`envelope` too."""
         s = self.settings
         ses, df = band_ses(spectrum, n, self.fs, np.array([[band.low, band.high]]), f_top)
         z = normalise(ses)
@@ -356,6 +359,10 @@ class EvidenceStream:
                 distinct = distinct and sidebands_carry(z, df, fr, terms[h], e.rho, s.mask_shaft)
             if not distinct:
                 evidence[h] = CombEvidence(0.0, e.rho, e.statistic, e.terms)
+        # the live view's hook (:mod:`.envelope_view`): this window's spectrum as tested, no copy
+        self.envelope = EnvelopeView(end, n, self.fs, z[0], df, (band.low, band.high), f_top, fr, self.speed[2],
+                                     self._told[0] if self._told else None, terms,
+                                     {h: e.rho for h, e in evidence.items()})
         return evidence
 
     def _snapshot_window(self) -> WindowEvidence | None:
@@ -378,7 +385,7 @@ class EvidenceStream:
         if band is None:
             return None
         spectrum = window_spectrum(x, s.prewhiten)
-        evidence = self._evidence(spectrum, x.size, band, terms, f_top, fr)
+        evidence = self._evidence(spectrum, x.size, band, terms, f_top, fr, end)
         if self.long is None:
             return WindowEvidence(start, end, evidence, band, fr, sigma, source, sensor, told, untested=untested)
         geometry = CombGeometry(self.fs, fr, sigma, x.size, self.rho, terms, f_top)

@@ -51,6 +51,7 @@ from ..decision.scores import THESIS_SUMMARY_KEYS, WindowScores
 from ..decision.stream_blocks import StreamBlocks
 from ..decision.thesis_blocks import XCORR_LAG_S, explained_fraction, train_correlation
 from .band_choice import BandChoice
+from .envelope_view import EnvelopeView
 from .evidence_stream import EvidenceStream, WindowEvidence
 from .fault_combs import HYPOTHESES
 from .window_label import label_window, significance_level
@@ -147,6 +148,10 @@ class SpectralFrontEnd:
     def flush(self, streams: dict[FaultState, StreamBlocks], expected: set) -> list[WindowVerdict]:
         """Nothing pending: every window is decided when its last sample arrives."""
         return []
+
+    def envelope_view(self) -> EnvelopeView | None:
+        """The last tested window's spectrum (:mod:`.envelope_view`); None before the first."""
+        return self.evidence.envelope
 
     def test_level(self, window: int) -> float:
         """α of each test for windows of ``window`` samples (module docstring)."""
