@@ -18,7 +18,7 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            "live_view = bearing_live_view.node:main",
+            "live_view = bearing_live_view.executables:live_view",
         ],
     },
 )

@@ -71,4 +71,4 @@ def test_a_node_executable_handles_stop_signals_before_its_heavy_imports(name, m
 
 
 def test_every_node_executable_is_listed():
-    assert set(_node_entry_modules()) == {"simulator", "observer", "diagnoser", "fleet", "nodes"}
+    assert set(_node_entry_modules()) == {"simulator", "observer", "diagnoser", "fleet", "nodes", "live_view"}
