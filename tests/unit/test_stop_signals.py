@@ -115,3 +115,19 @@ def test_a_start_in_python_code_ends_at_the_signal():
     run = subprocess.run([sys.executable, "-c", STARTING], capture_output=True, text=True, timeout=30)
     assert run.returncode == 0 and run.stderr == "probe: SIGTERM while starting: stopped\n", run.stderr
     assert time.monotonic() - start < 3.0
+
+
+def test_a_stop_raised_inside_a_finalizer_prints_nothing_and_stays_pending(capsys):
+    """A signal whose handler runs inside a ``__del__`` (numba's LLVM objects collected during a first
+    compile): Python cannot raise StopRequested there; it says nothing of it, and the stop stays
+    pending (the watcher ends a start-up still running; here: the flag is set)."""
+    class Collected:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.2)  # the handler runs here, inside the finalizer
+
+    with StopSignals() as stop:
+        stop.abort = True
+        Collected()  # collected at once: its finalizer runs the handler
+        assert stop.signal == signal.SIGINT
+    assert "Traceback" not in capsys.readouterr().err

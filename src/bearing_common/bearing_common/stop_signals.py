@@ -35,6 +35,7 @@ import contextlib
 import faulthandler
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable
 
@@ -66,7 +67,17 @@ class StopSignals:
             threading.Thread(target=self._watch, args=(self._wakeup[0],), name="stop-stall", daemon=True).start()
         for sig in STOP_SIGNALS:
             self._old[sig] = signal.signal(sig, self._handle)
+        self._old_unraisable = sys.unraisablehook
+        sys.unraisablehook = self._unraisable
         return self
+
+    def _unraisable(self, unraisable) -> None:
+        """A StopRequested raised where Python cannot raise it (a finalizer, ``__del__``, that the
+        garbage collector ran while the signal came: numba's LLVM objects during a first compile) is
+        swallowed there; the stop stays pending, and the watcher ends a start-up still running
+        :data:`START_GRACE_S` later (:meth:`_end_stuck_start`). Say nothing of it; pass on the rest."""
+        if not isinstance(unraisable.exc_value, StopRequested):
+            self._old_unraisable(unraisable)
 
     def _watch(self, fd: int) -> None:
         """Arm the stall timer when the first stop signal's number arrives on the wake-up pipe;
@@ -104,6 +115,7 @@ class StopSignals:
     def __exit__(self, *exc) -> None:
         for sig, old in self._old.items():
             signal.signal(sig, old if self.signal is None else signal.SIG_IGN)
+        sys.unraisablehook = self._old_unraisable
         if self._wakeup is not None:
             signal.set_wakeup_fd(self._old_wakeup_fd)
             os.close(self._wakeup[1])  # the watcher's read returns: it ends
