@@ -4,7 +4,6 @@ Without ROS: the session the node runs, fed residual chunks as the observers of 
 ``none`` pass the vibration on (y = r).
 """
 
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,10 +14,9 @@ from bearing_diagnoser.decision.not_diagnosed import NotDiagnosed
 from bearing_diagnoser.decision.scores import WindowScores
 from bearing_diagnoser.diagnoser_node_config import LEVEL_ERROR, LEVEL_OK, LEVEL_STALE, PARAMETERS
 from bearing_diagnoser.diagnoser_session import DiagnoserSession
-from bearing_diagnoser.front_ends import config_for
 from bearing_diagnoser.health.health_session import DecidedWindow, HealthSession, HealthSettings
 from bearing_diagnoser.health.trend import HealthState, TrendConfig
-from bearing_diagnoser.spectral.fault_combs import comb_terms, untestable
+from bearing_diagnoser.spectral.fault_combs import SLIP_ABOVE, SLIP_BELOW, comb_terms, drop_ambiguous, untestable
 from bearing_diagnoser.synthetic import burst_train, white_noise
 
 FS = 12000.0
@@ -110,28 +108,24 @@ def test_snapshots_are_snapshots_not_a_broken_stream(mode, index):
 
 
 def test_a_short_snapshot_tests_what_its_resolution_separates():
-    """0.2 s at 1800 rpm (5 Hz bins): the outer and inner race are tested, the ball's cage sidebands
-    (12 Hz off their carriers, 2.4 bins) are not; 0.1 s (10 Hz bins) tests nothing: the shaft-harmonic
-    mask covers every carrier (harmonics 3 bins apart, 1.5 masked each side)."""
-    terms = comb_terms(BEARING)
-    assert set(untestable(terms, 30.0, 5.0)) == {FaultState.BALL}
-    assert "2.4 bins from their carriers" in untestable(terms, 30.0, 5.0)[FaultState.BALL]
+    """0.2 s at 1800 rpm (5 Hz bins): the inner race is tested; the ball's cage sidebands (12 Hz off their
+    carriers, 2.4 bins) are not resolved; the outer race keeps one term clear of the shaft-harmonic mask
+    (2·BPFO lies 4.8 Hz from 7×; 3·BPFO is left out, as 2·BPFI's twin), and one term is no series.
+    0.1 s (10 Hz bins) tests nothing: the mask covers every carrier (harmonics 3 bins apart, 1.5 masked
+    each side). Untested hypotheses are said so and never called."""
+    terms = drop_ambiguous(comb_terms(BEARING), SLIP_BELOW + SLIP_ABOVE)
+    untested = untestable(terms, 30.0, 5.0)
+    assert set(untested) == {FaultState.BALL, FaultState.OUTER_RACE}
+    assert "2.4 bins from their carriers" in untested[FaultState.BALL]
+    assert "no series" in untested[FaultState.OUTER_RACE]
     assert set(untestable(terms, 30.0, 10.0)) == set(terms)
     assert untestable(terms, 30.0, 12000.0 / 4096) == {}  # the analysis window tests them all
     s, _ = session(input_mode="snapshot")
-    reports, records = feed_snapshots(s, 20, 0.2, amplitude=1.0)  # a fault too weak for one snapshot
+    reports, records = feed_snapshots(s, 20, 0.2)
     ev = records[-1].evidence
-    assert set(ev.significance) == {"outer_race", "inner_race"} and set(ev.untested) == {"ball"}
+    assert set(ev.significance) == {"inner_race"} and set(ev.untested) == {"ball", "outer_race"}
     assert s.history[-1].scores.horizon_s == pytest.approx(20 * 0.2, rel=0.01)  # every snapshot accumulated
-    assert records[0].evidence.significance["outer_race"] < 1.0 <= ev.accumulated["outer_race"]
-    assert reports[-1].state == FaultState.OUTER_RACE
-    cfg = config_for("none")  # the same snapshots each alone (no long horizon): never significant
-    alone, _ = session(input_mode="snapshot")
-    alone = DiagnoserSession(alone.values, lambda *a: None, keep_history=True,
-                             config=replace(cfg, front_end=replace(cfg.front_end, accumulate=False)))
-    reports, records = feed_snapshots(alone, 20, 0.2, amplitude=1.0)
-    assert max(r.evidence.significance["outer_race"] for r in records) < 1.0
-    assert {r.state for r in reports} == {FaultState.NORMAL} and len(reports) == 20
+    assert {r.state for r in reports} == {FaultState.NORMAL}
     s, _ = session(input_mode="snapshot")
     reports, records = feed_snapshots(s, 3, 0.1)
     assert not reports  # not diagnosed: nothing tested

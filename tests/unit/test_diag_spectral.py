@@ -18,6 +18,7 @@ from bearing_common.states import FaultState
 from bearing_diagnoser.diagnoser import Diagnoser
 from bearing_diagnoser.front_ends import config_for
 from bearing_diagnoser.recording_diagnosis import diagnose_measurement
+from bearing_diagnoser.spectral.accumulation import FINE
 from bearing_diagnoser.spectral.evidence_stream import EvidenceStream
 from bearing_diagnoser.spectral.fault_combs import comb_terms, drop_ambiguous
 from bearing_diagnoser.spectral.settings import check_resolvable
@@ -80,17 +81,18 @@ def test_healthy_machine_with_strong_lines_is_normal():
     assert min(d.confidence for d in dec) > 0.9
 
 
-def test_without_prewhitening_and_mask_the_lines_would_count():
-    """What the prewhitening and shaft mask are for: the same healthy signal, both off."""
+def test_shaft_and_mains_lines_never_count_even_without_prewhitening_and_mask():
+    """A healthy motor's strong shaft and mains harmonics: NORMAL with the defaults, and still NORMAL with
+    the prewhitening and the shaft mask both off, which used to let them lift the combs: the
+    distinctness checks (a series at one slip, standing out from decoys) see a family that is not
+    the fault's (:mod:`bearing_diagnoser.spectral.distinct_evidence`)."""
     from dataclasses import replace
     cfg = config_for("none")
     cfg = replace(cfg, front_end=replace(cfg.front_end, prewhiten=False, mask_shaft=False))
     y = machine_lines(4.0, amplitude=3.0) + noise(4.0, seed=2)
-    _, dec = diagnose_measurement(y, FS, RPM, model_set="none", config=cfg, bearing=BEARING)
+    _, bare = diagnose_measurement(y, FS, RPM, model_set="none", config=cfg, bearing=BEARING)
     _, clean = diagnose(y)
-    assert all(d.label == N for d in clean)
-    assert max(max(d.scores.significance.values()) for d in dec) > \
-        max(max(d.scores.significance.values()) for d in clean)
+    assert clean and bare and all(d.label == N for d in clean + bare)
 
 
 def test_p_values_hold_their_level_on_gaussian_noise():
@@ -131,7 +133,10 @@ def test_a_change_from_normal_to_outer_race_is_dated():
     # evidence) resolves the onset to about two windows: in the exponential tail a window of
     # noise added to the fault's barely weakens the evidence
     assert 3.0 - 2 * 0.34 <= segs[1].start <= 3.4
-    assert 3.0 < segs[1].detected_at <= 3.0 + 3 * 0.34
+    # at 1800 rpm the outer-race comb of a 6205 is a series only at the fine lane's resolution
+    # (2·BPFO lies within the shaft mask of 7x in one window's spectrum): detected once a block of
+    # FINE windows of the fault is in, one more window for the blocks' alignment with the onset
+    assert 3.0 < segs[1].detected_at <= 3.0 + (FINE + 1) * 0.34
 
 
 def test_window_is_four_cage_periods_and_follows_the_speed():

@@ -30,5 +30,8 @@ def test_cwru_records_with_speed_told_wrong(cwru_record, name, expected, factor)
     n = int(3.0 * rec.sample_rate)  # 3 s excerpt
     rec.accel = rec.accel[:n]
     result = diagnose_recording(rec, rpm=rec.rpm * factor)
-    share = sum(s.end - s.start for s in result.segments if s.state == expected) / (n / rec.sample_rate)
-    assert share >= 0.9, [s.to_json() for s in result.segments]
+    # every window but the first: one window of a told speed 1.5 % off (before the 2 s buffer refines
+    # it) may not hold a distinct series yet
+    first = result.decisions[0].time
+    assert all(s.state == expected for s in result.segments if s.end > first + 0.01), \
+        [s.to_json() for s in result.segments]

@@ -362,7 +362,9 @@ class DiagnoserSession:
         self.not_diagnosed, self.untested = d.not_diagnosed, d.scores.untested
         self.speed_warning = d.scores.speed_warning()
         if self.speed_warning:
-            self._log_repeatable("speed disagrees", "warning", self.speed_warning)
+            unconfirmed = getattr(d.scores, "speed_unconfirmed", 0.0)  # (the spectral front end's scores)
+            self._log_repeatable("speed not confirmed" if unconfirmed else "speed disagrees", "warning",
+                                 self.speed_warning)
         return d.diagnosed
 
     def _report(self, d: Decision) -> StateReport:

@@ -12,20 +12,29 @@ fault line stays, so a comb too weak for one window becomes overwhelming over ma
 (Bonferroni over the candidates), or, for the textbook baseline, as the band of the highest
 mean spectral kurtosis.
 
-:class:`LongHorizon` keeps two accumulations staggered by half of ``max_windows``: the
-evidence always rests on between ``max_windows``/2 and ``max_windows`` windows (10-11 s at
-1800 rpm for a 6205), so that an old condition does not dilute a new one for ever, and a
-deterministic residue of a healthy machine cannot grow without bound. A change of geometry
-(the shaft rate moved by more than half a bin at the highest comb term), a gap, or a change
-the short horizon sees (:mod:`.front_end`) restarts both; a re-estimate of the same speed
-only retunes the combs (the spectra summed so far hold).
+:class:`LongHorizon` keeps two lanes. Each lane keeps two accumulations staggered by half of
+its length: the evidence always rests on between half and all of ``max_windows`` windows
+(10-11 s at 1800 rpm for a 6205), so that an old condition does not dilute a new one for ever,
+and a deterministic residue of a healthy machine cannot grow without bound.
 
-Distinct evidence: each hypothesis' best comb must stand out from the same comb searched at
-scales where its fault does not lie (:func:`.fault_combs.stands_out`: another periodicity's
-family of lines lifts those as much); a ball comb must carry its cage sidebands
-(:func:`.fault_combs.sidebands_carry`); and each hypothesis but the strongest is tested
-again without the bins the strongest one's comb occupies (a line that both explain does
-not decide between them).
+* The coarse lane sums the analysis windows' spectra.
+* The fine lane sums the spectra of blocks of :data:`FINE` = 4 contiguous windows: bins 4×
+  narrower, so that the resolution grows with the evidence. A fault line sits off the shaft
+  harmonic next to it by its slip (1-2 %), which the analysis window's bin cannot tell from the
+  harmonic where a fault frequency is nearly an integer order (BPFO = 3.00× for 8 balls with
+  d/D = 0.25; 2·BPFO of a 6205 at 600 rpm lies 1 Hz from 6×): the shaft-harmonic mask
+  (1.5 bins) then covers the fault's own terms, and one term is left, which is no series
+  (:mod:`.distinct_evidence`). Four windows resolve slip offsets a quarter as large; the
+  fine lane holds a quarter as many spectra, so its floor is rougher.
+
+Each lane's evidence pays for its two accumulations, and the long horizon's for both lanes
+(four tests). A change of geometry (the shaft rate moved by more than half a bin at the
+highest comb term), a gap, or a change the short horizon sees (:mod:`.front_end`) restarts
+both lanes; a re-estimate of the same speed only retunes the combs (the spectra summed so far
+hold). The onset of a condition is read from the coarse lane's windows.
+
+Only distinct evidence counts, judged on the accumulated spectrum exactly as on one window's
+(:mod:`.distinct_evidence`).
 """
 
 from __future__ import annotations
@@ -37,8 +46,9 @@ import numpy as np
 
 from bearing_common.states import FaultState
 
-from .envelope_spectrum import band_kurtosis, band_ses, normalise
-from .fault_combs import comb_evidence, highest_term, recent_run_evidence, sidebands_carry, stands_out, term_frequencies
+from .distinct_evidence import distinct, explain_away
+from .envelope_spectrum import band_kurtosis, band_ses, normalise, window_spectrum
+from .fault_combs import comb_evidence, highest_term, recent_run_evidence
 from .significance import averaged_median
 
 
@@ -81,12 +91,13 @@ class Accumulation:
     (:mod:`.band_choice`)."""
 
     def __init__(self, start: int, geometry: CombGeometry, bands: list[np.ndarray], mask_shaft: bool = True,
-                 criterion: str = "evidence"):
+                 criterion: str = "evidence", series: bool = True):
         self.start = start
         self.geometry = geometry
         self.bands = bands
         self.mask_shaft = mask_shaft
         self.criterion = criterion
+        self.series = series
         self.windows = 0
         self.df = geometry.fs / geometry.window  # SES bin width (Hz)
         self._sums: list[np.ndarray | None] = [None] * len(bands)
@@ -122,13 +133,11 @@ class Accumulation:
         rows = self._stack(z, self._rows())
         n_bands = (self.n_bands if self.criterion == "evidence" else 1) * tests
         found = {h: e for h in g.terms if (e := self._best(z, rows, h, n_bands)) is not None}
-        if len(found) > 1:  # the others without the strongest one's lines
-            strongest = min(found, key=lambda h: found[h].log10p)
-            held = term_frequencies(g.terms, strongest, found[strongest].rho, g.fr)
-            for h in found:
-                if h != strongest:
-                    found[h] = self._best(z, rows, h, n_bands, exclude=held) or found[h]
-        return found
+        found = explain_away(found, g.terms, g.fr, lambda h, held: self._best(z, rows, h, n_bands, held))
+        return {h: e.evidence if e.evidence.log10p == 0.0 or distinct(
+            e.row, self.df, g.fr, h, g.terms[h], g.rho, e.evidence.rho, e.evidence.log10p - np.log10(n_bands),
+            self.mask_shaft, self.windows, self.series) else replace(e.evidence, log10p=0.0)
+            for h, e in found.items()}
 
     def _rows(self) -> list:
         """The (group, rows) tested: every band, or the band of the highest mean kurtosis."""
@@ -151,40 +160,109 @@ class Accumulation:
             return [(np.concatenate([p[:, :length] for p in parts]), index)]
         return [(p, [(i, r) for i, r in index if i == gi]) for p, (gi, _) in zip(parts, rows)]
 
-    def _best(self, z: list, rows: list, h: FaultState, n_bands: int, exclude=()) -> HorizonEvidence | None:
+    def _best(self, z: list, rows: list, h: FaultState, n_bands: int, exclude=()) -> _Best | None:
+        """``h``'s best comb match over the tested rows, with the spectrum row it was found on."""
         g = self.geometry
         best = None
         for spectra, index in rows:
             lp, rho, s, j = comb_evidence(spectra, self.df, g.fr, {h: g.terms[h]}, g.rho, self.mask_shaft, n_bands,
                                           self.windows, exclude)[h]
             r = int(np.argmin(lp))
-            if best is None or lp[r] < best[0].log10p:
+            if best is None or lp[r] < best.log10p:
                 i, row = index[r]
                 band = self.bands[i][row]
-                best = HorizonEvidence(float(lp[r]), float(rho[r]), (float(band[0]), float(band[1])), float(s[r]),
-                                       int(j[r])), z[i][row]
-        if best is None:
+                best = _Best(HorizonEvidence(float(lp[r]), float(rho[r]), (float(band[0]), float(band[1])),
+                                             float(s[r]), int(j[r])), z[i][row])
+        return best
+
+
+@dataclass(frozen=True)
+class _Best:
+    """A hypothesis' best match and the normalised spectrum row it was found on (its distinctness is
+    judged there)."""
+
+    evidence: HorizonEvidence
+    row: np.ndarray
+
+    @property
+    def log10p(self) -> float:
+        return self.evidence.log10p
+
+    @property
+    def rho(self) -> float:
+        return self.evidence.rho
+
+
+class Lane:
+    """Two accumulations of windows of one length, staggered by ``max_windows``/2 (module docstring)."""
+
+    def __init__(self, max_windows: int, mask_shaft: bool = True, criterion: str = "evidence", series: bool = True):
+        self.max_windows = int(max_windows)
+        self._options = (mask_shaft, criterion, series)
+        self.open: list[Accumulation] = []
+        self._next_start: int | None = None  # first sample a window must start at (non-overlapping)
+
+    def restart(self, start: int, geometry: CombGeometry, bands: list[np.ndarray]) -> None:
+        self.open = [Accumulation(start, geometry, bands, *self._options)]
+        self._next_start = start
+
+    def retune(self, geometry: CombGeometry) -> None:
+        for acc in self.open:
+            acc.geometry = replace(geometry, window=acc.geometry.window, f_top=acc.geometry.f_top)
+
+    def stop(self) -> None:
+        self.open, self._next_start = [], None
+
+    def add(self, start: int, spectrum: np.ndarray) -> list[np.ndarray] | None:
+        """The window starting at sample ``start`` (its rfft), when it overlaps no window already taken:
+        its :meth:`Accumulation.spectra` (None: not taken)."""
+        if not self.open or start < self._next_start:
             return None
-        e, row = best
-        if e.log10p == 0.0:  # no evidence: nothing to tell apart
-            return e
-        distinct = stands_out(row, self.df, g.fr, g.terms[h], g.rho, e.log10p - np.log10(n_bands), self.mask_shaft,
-                              self.windows)
-        if h == FaultState.BALL:
-            distinct = distinct and sidebands_carry(row, self.df, g.fr, g.terms[h], e.rho, self.mask_shaft,
-                                                    self.windows)
-        return e if distinct else HorizonEvidence(0.0, e.rho, e.band, e.statistic, e.terms)
+        first = self.open[0]
+        spectra = first.spectra(spectrum)
+        for acc in self.open:
+            acc.add(spectrum, spectra)
+        self._next_start = start + first.geometry.window
+        if first.windows >= self.max_windows:
+            self.open.pop(0)
+        if len(self.open) == 1 and self.open[0].windows >= self.max_windows // 2:
+            self.open.append(Accumulation(self._next_start, first.geometry, first.bands, *self._options))
+        return spectra
+
+    def evidence(self, tests: int) -> dict:
+        """{hypothesis: HorizonEvidence}: the stronger of the two accumulations, paying for both and for
+        ``tests`` more."""
+        out: dict = {}
+        for acc in self.open:
+            for h, e in acc.evidence(tests=2 * tests).items():
+                if h not in out or e.log10p < out[h].log10p:
+                    out[h] = e
+        return out
+
+
+#: Windows per block of the fine lane: its spectra resolve FINE times finer (module docstring).
+FINE = 4
+
 
 class LongHorizon:
-    """Two accumulations staggered by ``max_windows``/2 (module docstring)."""
+    """The coarse lane (the analysis windows) and the fine lane (blocks of :data:`FINE` contiguous
+    windows), both restarted together (module docstring); ``prewhiten`` as the windows' spectra."""
 
-    def __init__(self, max_windows: int = 32, mask_shaft: bool = True, criterion: str = "evidence"):
+    def __init__(self, max_windows: int = 32, mask_shaft: bool = True, criterion: str = "evidence",
+                 series: bool = True, prewhiten: bool = True):
         self.max_windows = int(max_windows)
         self.mask_shaft = mask_shaft
-        self.criterion = criterion
-        self._open: list[Accumulation] = []
-        self._next_start: int | None = None  # first sample a window must start at (non-overlapping)
+        self.prewhiten = prewhiten
+        self.coarse = Lane(max_windows, mask_shaft, criterion, series)
+        self.fine = Lane(max(2, max_windows // FINE), mask_shaft, criterion, series)
+        self._block: list[np.ndarray] = []  # the contiguous windows of the next fine block
+        self._block_start = 0
+        self._fine_evidence: dict = {}
         self._recent: deque = deque(maxlen=self.max_windows)  # (start, spectra) of the windows held
+
+    @property
+    def _open(self) -> list[Accumulation]:
+        return self.coarse.open
 
     @property
     def geometry(self) -> CombGeometry | None:
@@ -195,44 +273,56 @@ class LongHorizon:
         """First sample of the evidence (the older accumulation's start)."""
         return self._open[0].start if self._open else None
 
+    @property
+    def bands(self) -> list[np.ndarray]:
+        """The candidate bands the evidence is accumulated in (one (m, 2) array per width, Hz)."""
+        return self._open[0].bands
+
     def restart(self, start: int, geometry: CombGeometry, bands: list[np.ndarray]) -> None:
         """Forget everything: the evidence begins afresh with the window starting at ``start``."""
-        self._open = [Accumulation(start, geometry, bands, self.mask_shaft, self.criterion)]
-        self._next_start = start
-        self._recent.clear()
+        self.coarse.restart(start, geometry, bands)
+        self.fine.restart(start, replace(geometry, window=FINE * geometry.window), bands)
+        self._forget()
 
     def retune(self, geometry: CombGeometry) -> None:
         """A re-estimate of the same speed (:meth:`CombGeometry.same_bins`): the sums stand, the combs are
         tested at the new rate and slip range from now on (the spectra keep their length: ``f_top``)."""
-        for acc in self._open:
-            acc.geometry = replace(geometry, f_top=acc.geometry.f_top)
+        self.coarse.retune(geometry)
+        self.fine.retune(geometry)
 
     def stop(self) -> None:
         """Hold no evidence (no geometry yet, a gap)."""
-        self._open, self._next_start = [], None
+        self.coarse.stop()
+        self.fine.stop()
+        self._forget()
+
+    def _forget(self) -> None:
+        self._block, self._fine_evidence = [], {}
         self._recent.clear()
 
-    def add(self, start: int, spectrum: np.ndarray) -> bool:
-        """The window starting at sample ``start`` (its rfft), when it overlaps no window already taken;
-        whether it was taken."""
-        if not self._open or start < self._next_start:
+    def add(self, start: int, spectrum: np.ndarray, x: np.ndarray) -> bool:
+        """The window of samples ``x`` starting at sample ``start`` (its rfft ``spectrum``), when it overlaps
+        no window already taken; whether it was taken. Every :data:`FINE` contiguous windows taken make
+        one block of the fine lane."""
+        spectra = self.coarse.add(start, spectrum)
+        if spectra is None:
             return False
-        first = self._open[0]
-        spectra = first.spectra(spectrum)
-        for acc in self._open:
-            acc.add(spectrum, spectra)
         self._recent.append((start, spectra))
-        self._next_start = start + first.geometry.window
-        if first.windows >= self.max_windows:
-            self._open.pop(0)
-        if len(self._open) == 1 and self._open[0].windows >= self.max_windows // 2:
-            self._open.append(Accumulation(self._next_start, first.geometry, first.bands, self.mask_shaft,
-                                           self.criterion))
+        if self._block and start != self._block_start + sum(b.size for b in self._block):
+            self._block = []  # not contiguous (snapshots): a block holds one stretch of signal
+        if not self._block:
+            self._block_start = start
+        self._block.append(np.array(x, float))
+        if len(self._block) == FINE:
+            block = np.concatenate(self._block)
+            self.fine.add(self._block_start, window_spectrum(block, self.prewhiten))
+            self._block = []
+            self._fine_evidence = self.fine.evidence(tests=2)
         return True
 
     @property
     def windows(self) -> int:
-        """Windows the evidence rests on (the older accumulation's)."""
+        """Windows the evidence rests on (the coarse lane's older accumulation's)."""
         return self._open[0].windows if self._open else 0
 
     def onset(self, hypothesis: FaultState, evidence: HorizonEvidence) -> int:
@@ -255,10 +345,10 @@ class LongHorizon:
         return held[len(held) - 1 - strongest][0] if lp[strongest] < 0.0 else held[0][0]
 
     def evidence(self) -> dict:
-        """{hypothesis: HorizonEvidence}: the stronger of the two accumulations, paying for both."""
-        out: dict = {}
-        for acc in self._open:
-            for h, e in acc.evidence(tests=2).items():
-                if h not in out or e.log10p < out[h].log10p:
-                    out[h] = e
+        """{hypothesis: HorizonEvidence}: the strongest of the two lanes' accumulations, paying for all four
+        (the fine lane's evaluated when a block completes)."""
+        out = self.coarse.evidence(tests=2)
+        for h, e in self._fine_evidence.items():
+            if h not in out or e.log10p < out[h].log10p:
+                out[h] = e
         return out

@@ -22,7 +22,8 @@ Schedule, derived from the bearing and the speed (nothing fitted to a recording)
 
 The speed: a told one (a tachometer; a nameplate or a recording's label, ``told_tolerance``)
 is a prior. The shaft rate is measured from the 1x line and its harmonics
-(:mod:`.shaft_speed`, at least three lines) within the told tolerance; when none is found
+(:mod:`.shaft_speed`, at least three lines) within the told tolerance, failing that from any
+two shaft harmonics in the raw or the envelope spectrum (:func:`.shaft_speed.confirm_speed`); when none is found
 there but a shaft comb is plain within twice the tolerance, that measurement is used and
 said to disagree with the told speed (``speed_source`` "measured"); otherwise the told speed
 stands, with its whole tolerance as uncertainty (a wide slip search); a buffer without
@@ -58,6 +59,7 @@ from bearing_common.states import FaultState
 from ..decision.sensor_health import SensorCheck, check_window
 from .accumulation import CombGeometry, LongHorizon
 from .band_choice import BandChoice, choose_band, live_bands
+from .distinct_evidence import distinct, explain_away
 from .envelope_spectrum import band_ses, normalise, window_spectrum
 from .envelope_view import EnvelopeView
 from .fault_combs import (
@@ -67,13 +69,10 @@ from .fault_combs import (
     drop_ambiguous,
     highest_term,
     rho_range,
-    sidebands_carry,
-    stands_out,
-    term_frequencies,
     untestable,
 )
 from .settings import SpectralSettings, check_resolvable
-from .shaft_speed import estimate_speed
+from .shaft_speed import confirm_speed, estimate_speed
 
 
 @dataclass(frozen=True)
@@ -134,8 +133,8 @@ class EvidenceStream:
         self.speed: tuple[float, float, str] | None = None  # (Hz, sigma Hz, source)
         self.band: BandChoice | None = None
         self._geometry_for: float | None = None
-        self.long = LongHorizon(settings.max_windows, settings.mask_shaft, settings.band_criterion) \
-            if settings.accumulate else None
+        self.long = LongHorizon(settings.max_windows, settings.mask_shaft, settings.band_criterion,
+                                not settings.fundamental_only, settings.prewhiten) if settings.accumulate else None
         self._long_evidence: dict = {}
         self.envelope: EnvelopeView | None = None  # the last window's spectrum as tested (:mod:`.envelope_view`)
 
@@ -184,6 +183,11 @@ class EvidenceStream:
             refine = s.refine_speed and resolved
             found = estimate_speed(x, self.fs, hz * (1 - tol), hz * (1 + tol), min_lines=s.speed_lines) \
                 if refine else None
+            measured = self.speed is not None and self.speed[2] in ("refined", "measured")
+            if refine and not measured and (found is None or self._fault_family(found.hz, hz)):
+                # any two shaft lines confirm a told speed; they never replace a measurement of the full series
+                band = (self.band.low, self.band.high) if self.band is not None else None
+                found = confirm_speed(x, self.fs, hz * (1 - tol), hz * (1 + tol), band)
             if found and not self._fault_family(found.hz, hz):
                 self.speed = (found.hz, found.sigma, "refined")
                 return
@@ -239,7 +243,7 @@ class EvidenceStream:
         """The condition changed at sample ``start``: the long horizon begins afresh with the window
         starting there (same geometry)."""
         if self.long is not None and self.long.geometry is not None:
-            self.long.restart(start, self.long.geometry, self.long._open[0].bands)
+            self.long.restart(start, self.long.geometry, self.long.bands)
             self._long_evidence = {}
 
     # -- samples in, evidence out -------------------------------------------------------
@@ -327,7 +331,7 @@ class EvidenceStream:
         told = self._told[0] if self._told else None
         if self.long is None:
             return WindowEvidence(end - self.window, end, evidence, self.band, fr, sigma, source, sensor, told)
-        if self.long.add(end - self.window, spectrum):
+        if self.long.add(end - self.window, spectrum, x):
             self._long_evidence = self.long.evidence()
         return WindowEvidence(end - self.window, end, evidence, self.band, fr, sigma, source, sensor, told,
                               self._long_evidence, self.long.start or 0, self.long.windows)
@@ -343,21 +347,17 @@ class EvidenceStream:
         found = comb_evidence(z, df, fr, terms, self.rho, s.mask_shaft, band.candidates)
         evidence = {h: CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
                     for h, (lp, rho, stat, j) in found.items()}
-        if len(evidence) > 1:  # the others without the strongest one's lines (:mod:`.accumulation`)
-            strongest = min(evidence, key=lambda h: evidence[h].log10p)
-            held = term_frequencies(terms, strongest, evidence[strongest].rho, fr)
-            others = {h: terms[h] for h in evidence if h != strongest}
-            for h, (lp, rho, stat, j) in comb_evidence(z, df, fr, others, self.rho, s.mask_shaft, band.candidates,
-                                                       exclude=held).items():
-                evidence[h] = CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
-        for h, e in evidence.items():  # distinct evidence only (:mod:`.accumulation`)
-            if e.log10p == 0.0:
-                continue
-            distinct = stands_out(z, df, fr, terms[h], self.rho, e.log10p - np.log10(band.candidates),
-                                  s.mask_shaft)
-            if h == FaultState.BALL:
-                distinct = distinct and sidebands_carry(z, df, fr, terms[h], e.rho, s.mask_shaft)
-            if not distinct:
+
+        def retest(h: FaultState, held: np.ndarray) -> CombEvidence:
+            lp, rho, stat, j = comb_evidence(z, df, fr, {h: terms[h]}, self.rho, s.mask_shaft, band.candidates,
+                                             exclude=held)[h]
+            return CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
+
+        evidence = explain_away(evidence, terms, fr, retest)
+        for h, e in evidence.items():  # distinct evidence only (:mod:`.distinct_evidence`)
+            if e.log10p < 0.0 and not distinct(z[0], df, fr, h, terms[h], self.rho, e.rho,
+                                               e.log10p - np.log10(band.candidates), s.mask_shaft,
+                                               series=not s.fundamental_only):
                 evidence[h] = CombEvidence(0.0, e.rho, e.statistic, e.terms)
         # the live view's hook (:mod:`.envelope_view`): this window's spectrum as tested, no copy
         self.envelope = EnvelopeView(end, n, self.fs, z[0], df, (band.low, band.high), f_top, fr, self.speed[2],
@@ -374,7 +374,7 @@ class EvidenceStream:
         fr, sigma, source = self.speed
         told = self._told[0] if self._told else None
         sensor = check_window(x)
-        untested = untestable(self.terms, fr, self.fs / x.size, s.mask_shaft)
+        untested = untestable(self.terms, fr, self.fs / x.size, s.mask_shaft, not s.fundamental_only)
         terms = {h: t for h, t in self.terms.items() if h not in untested}
         if not sensor.ok or not terms:
             return WindowEvidence(start, end, {}, None, fr, sigma, source, sensor, told, untested=untested)
@@ -395,7 +395,7 @@ class EvidenceStream:
         else:
             self.long.restart(start, geometry, live_bands(np.fft.rfft(x - x.mean()), x.size, self.fs, f_top, usable))
             self._long_evidence = {}
-        if self.long.add(start, spectrum):
+        if self.long.add(start, spectrum, x):
             self._long_evidence = self.long.evidence()
         return WindowEvidence(start, end, evidence, band, fr, sigma, source, sensor, told, self._long_evidence,
                               self.long.start or 0, self.long.windows, untested)

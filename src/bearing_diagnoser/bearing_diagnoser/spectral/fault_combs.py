@@ -102,13 +102,15 @@ RESOLVED_BINS = 4.0
 SHAFT_MASK_BINS = 1.5
 
 
-def untestable(terms: dict, fr: float, df: float, mask_shaft: bool = True) -> dict:
+def untestable(terms: dict, fr: float, df: float, mask_shaft: bool = True, series: bool = True) -> dict:
     """{hypothesis: why} for the combs a spectrum of bin width ``df`` (Hz) cannot test at shaft rate ``fr``
     (Hz): those whose sidebands lie fewer than :data:`RESOLVED_BINS` bins from their carriers (they are
     what tells the inner race, turning with the shaft, and the ball, travelling with the cage, from the
     others), and, with the shaft-harmonic mask, those whose every carrier lies within
-    :data:`SHAFT_MASK_BINS` of a shaft harmonic (at the kinematic frequencies). A window of the
-    analysis length (4 cage periods) tests every hypothesis; a short snapshot may not."""
+    :data:`SHAFT_MASK_BINS` of a shaft harmonic, or (``series``: evidence must be a series,
+    :mod:`.distinct_evidence`) that keep fewer than two terms clear of them (at the kinematic
+    frequencies). A window of the analysis length (4 cage periods) tests every hypothesis of a
+    6205; a short snapshot may not."""
     out = {}
     for h, t in terms.items():
         carriers = t[t[:, 2] == 1, 0] * fr
@@ -122,9 +124,11 @@ def untestable(terms: dict, fr: float, df: float, mask_shaft: bool = True) -> di
                 out[h] = f"sidebands {offset:.1f} bins from their carriers, {RESOLVED_BINS:g} needed"
                 continue
         if mask_shaft:
-            order = np.rint(carriers / fr)
-            if np.all((order >= 1) & (np.abs(carriers - order * fr) < SHAFT_MASK_BINS * df)):
+            _, clear = term_bins(df, fr, t, np.array([1.0]), np.iinfo(np.int32).max, True, ())
+            if not clear[0, t[:, 2] == 1].any():
                 out[h] = f"every carrier within {SHAFT_MASK_BINS:g} bins of a shaft harmonic"
+            elif series and clear.sum() < 2:
+                out[h] = f"one term clear of the shaft harmonics ({SHAFT_MASK_BINS:g} bins): no series to test"
     return out
 
 
@@ -151,11 +155,11 @@ def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[f
         if len(t) == 0:
             out[h] = (np.zeros(z.shape[0]), np.ones(z.shape[0]), np.zeros(z.shape[0]), np.zeros(z.shape[0], int))
             continue
-        rhos, n_cells = _scales(t, rho, df, fr)
-        s, j = _comb_sums(z, df, fr, t, rhos, mask_shaft, exclude)
-        best = _best_scale(s, j, k)[:, 0]
+        rhos, n_cells = scales(t, rho, df, fr)
+        s, j = comb_sums(z, df, fr, t, rhos, mask_shaft, exclude)
+        best = best_scale(s, j, k)[:, 0]
         s_best = s[np.arange(z.shape[0]), best]
-        out[h] = (np.minimum(0.0, _log10p(s_best, j[best], k) + np.log10(n_cells * n_bands)), rhos[best], s_best,
+        out[h] = (np.minimum(0.0, log10p_k(s_best, j[best], k) + np.log10(n_cells * n_bands)), rhos[best], s_best,
                   j[best])
     return out
 
@@ -165,16 +169,16 @@ def recent_run_evidence(z: np.ndarray, df: float, geometry, hypothesis: FaultSta
     """log10 p of ``hypothesis``' comb (at ``geometry``, :class:`.accumulation.CombGeometry`) in each row
     r of ``z``: the normalised mean SES of the last r + 1 windows (no band-choice factor)."""
     t = geometry.terms[hypothesis]
-    rhos, n_cells = _scales(t, geometry.rho, df, geometry.fr)
-    s, j = _comb_sums(z, df, geometry.fr, t, rhos, mask_shaft, ())
+    rhos, n_cells = scales(t, geometry.rho, df, geometry.fr)
+    s, j = comb_sums(z, df, geometry.fr, t, rhos, mask_shaft, ())
     out = np.empty(z.shape[0])
     for r in range(z.shape[0]):
-        best = _best_scale(s[r:r + 1], j, r + 1)[0, 0]
-        out[r] = min(0.0, _log10p(s[r:r + 1, best], j[best:best + 1], r + 1)[0] + np.log10(n_cells))
+        best = best_scale(s[r:r + 1], j, r + 1)[0, 0]
+        out[r] = min(0.0, log10p_k(s[r:r + 1, best], j[best:best + 1], r + 1)[0] + np.log10(n_cells))
     return out
 
 
-def _scales(t: np.ndarray, rho: tuple[float, float], df: float, fr: float) -> tuple[np.ndarray, int]:
+def scales(t: np.ndarray, rho: tuple[float, float], df: float, fr: float) -> tuple[np.ndarray, int]:
     """The scales ρ searched for comb ``t`` (half a bin apart at its highest term) and the distinct
     bins that term visits (the search's Bonferroni count)."""
     top = t[:, 0].max()
@@ -183,23 +187,31 @@ def _scales(t: np.ndarray, rho: tuple[float, float], df: float, fr: float) -> tu
     return rhos, int(np.ceil((rho[1] - rho[0]) * top * fr / df)) + 1
 
 
-def _comb_sums(z: np.ndarray, df: float, fr: float, t: np.ndarray, rhos: np.ndarray, mask_shaft: bool,
-               exclude) -> tuple[np.ndarray, np.ndarray]:
-    """S (rows of ``z``, scales) and J (scales) of comb ``t`` at every scale of ``rhos``."""
-    nb = z.shape[1]
+def term_bins(df: float, fr: float, t: np.ndarray, rhos: np.ndarray, nb: int, mask_shaft: bool, exclude
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Bin (n_rho, J) of each term of comb ``t`` at each scale of ``rhos`` in a spectrum of ``nb`` bins, and
+    whether it counts: inside the spectrum, not on a shaft harmonic (with ``mask_shaft``), not within
+    1.5 bins of a frequency of ``exclude`` (Hz)."""
     f = (t[None, :, 0] * rhos[:, None] + t[None, :, 1]) * fr  # (n_rho, J)
     idx = np.rint(f / df).astype(int)
     active = (idx >= 1) & (idx < nb)
     if mask_shaft:
         order = np.rint(f / fr)
-        active &= ~((order >= 1) & (np.abs(f - order * fr) < 1.5 * df))
+        active &= ~((order >= 1) & (np.abs(f - order * fr) < SHAFT_MASK_BINS * df))
     for g in np.atleast_1d(np.asarray(exclude, float)):
-        active &= np.abs(f - g) >= 1.5 * df
-    values = np.where(active[None], z[:, np.clip(idx, 0, nb - 1)], 0.0)  # (m, n_rho, J)
+        active &= np.abs(f - g) >= SHAFT_MASK_BINS * df
+    return np.clip(idx, 0, nb - 1), active
+
+
+def comb_sums(z: np.ndarray, df: float, fr: float, t: np.ndarray, rhos: np.ndarray, mask_shaft: bool,
+              exclude) -> tuple[np.ndarray, np.ndarray]:
+    """S (rows of ``z``, scales) and J (scales) of comb ``t`` at every scale of ``rhos``."""
+    idx, active = term_bins(df, fr, t, rhos, z.shape[1], mask_shaft, exclude)
+    values = np.where(active[None], z[:, idx], 0.0)  # (m, n_rho, J)
     return values.sum(axis=2), active.sum(axis=1)
 
 
-def _best_scale(s: np.ndarray, j: np.ndarray, k: int, starts=(0,)) -> np.ndarray:
+def best_scale(s: np.ndarray, j: np.ndarray, k: int, starts=(0,)) -> np.ndarray:
     """Index of the best scale per row of S (rows, scales) with J (scales), in each run of scales
     beginning at ``starts`` ((rows, runs); the first of equals): by the tabulated p-value for
     single windows, for k averaged ones by the p-value at the normalising median's median."""
@@ -215,70 +227,9 @@ def _best_scale(s: np.ndarray, j: np.ndarray, k: int, starts=(0,)) -> np.ndarray
     return np.minimum.reduceat(np.where(at_low, np.arange(score.shape[1]), score.shape[1]), starts, axis=1)
 
 
-def _log10p(s: np.ndarray, j: np.ndarray, k: int) -> np.ndarray:
+def log10p_k(s: np.ndarray, j: np.ndarray, k: int) -> np.ndarray:
     """log10 p of comb sums S with J terms over spectra averaged from k windows, elementwise."""
     return comb_log10p(s, j) if k == 1 else averaged_comb_log10p(s, j, k)
-
-#: log10 of the level at which a ball comb's cage sidebands, tested alone at the comb's best scale,
-#: must show evidence of their own: a ball defect travels with the cage through the load zone
-#: (its lines come with FTF sidebands); a family of lines without them is another machine's.
-SIDEBAND_LEVEL = -2.0
-
-
-def sidebands_carry(z: np.ndarray, df: float, fr: float, terms: np.ndarray, rho: float, mask_shaft: bool = True,
-                    k: int = 1) -> bool:
-    """Whether the sideband terms (``is_carrier`` 0) of one comb, at scale ``rho`` on the normalised SES row
-    ``z`` (k windows averaged), are significant on their own at :data:`SIDEBAND_LEVEL` (one test, no search)."""
-    side = terms[terms[:, 2] == 0]
-    if not len(side):
-        return True
-    lp, _, _, _ = comb_evidence(z, df, fr, {FaultState.BALL: side}, (rho, rho), mask_shaft, 1, k)[FaultState.BALL]
-    return bool(lp[0] < SIDEBAND_LEVEL)
-
-
-#: Decoy searches a comb must beat: this many scale ranges as wide as its slip search, the nearest
-#: ones either side of it whose terms keep clear of the comb's own (in widths: 2, 3, ... up to 12).
-N_DECOYS = 8
-
-
-def decoy_ranges(terms: np.ndarray, rho: tuple[float, float], df: float, fr: float) -> list[tuple[float, float]]:
-    """Up to :data:`N_DECOYS` scale ranges for :func:`stands_out`: as wide as ``rho``, nearest first,
-    alternating sides, each one's terms clear (by 1.5 bins) of every term of the comb itself over
-    ``rho`` (an IR comb's carrier shifted by a fifth lands on its own shaft sideband)."""
-    width = max(rho[1] - rho[0], 0.01)
-    centre = 0.5 * (rho[0] + rho[1])
-    c, d = terms[:, 0], terms[:, 1]
-    own = np.sort(np.stack([(c * r + d) * fr for r in rho], axis=-1), axis=-1)  # (J, 2) Hz
-    m = np.repeat(np.arange(2, 13), 2)
-    lo = centre + np.tile([-1.0, 1.0], 11) * m * width - 0.5 * width  # nearest first, alternating sides
-    lo = lo[lo > 0.2]
-    span = np.stack([(c * lo[:, None] + d) * fr, (c * (lo[:, None] + width) + d) * fr], axis=-1)  # (n, J, 2)
-    a1, b1 = span[:, :, None, 0], span[:, :, None, 1]
-    a2, b2 = own[None, None, :, 0], own[None, None, :, 1]
-    clear = ((b1 + 1.5 * df < a2) | (b2 + 1.5 * df < a1)).all(axis=(1, 2))
-    return [(float(x), float(x + width)) for x in lo[clear][:N_DECOYS]]
-
-def stands_out(z: np.ndarray, df: float, fr: float, terms: np.ndarray, rho: tuple[float, float], log10p: float,
-               mask_shaft: bool = True, k: int = 1) -> bool:
-    """Whether a comb's best match (``log10p``, over the slip range ``rho``, without the band choice's
-    factor) beats the same comb searched over the decoy ranges (:func:`decoy_ranges`) on the same
-    spectrum row ``z``.
-
-    A family of lines that is not this fault's — harmonics of another periodicity, a dense comb
-    of a machine's own — lifts the comb at scales where no line of this fault lies as much as
-    at the fault's: the fault's comb must stand out from all of them (eight decoys: one chance
-    in nine under any exchangeable null). Decoys that land on another hypothesis' lines only
-    make the test stricter: evidence another hypothesis explains does not decide.
-    """
-    decoys = [_scales(terms, r, df, fr) for r in decoy_ranges(terms, rho, df, fr)]
-    if not decoys:
-        return True
-    s, j = _comb_sums(np.atleast_2d(z), df, fr, terms, np.concatenate([r for r, _ in decoys]), mask_shaft, ())
-    best = _best_scale(s, j, k, np.cumsum([0] + [r.size for r, _ in decoys[:-1]]))[0]
-    lp = _log10p(s[0, best], j[best], k)
-    lp = np.minimum(0.0, lp + np.log10([n for _, n in decoys]))
-    return bool(np.all(lp > log10p))
-
 
 def term_frequencies(terms: dict, hypothesis: FaultState, rho: float, fr: float) -> np.ndarray:
     """Frequencies (Hz) of ``hypothesis``' comb at scale ``rho`` and shaft rate ``fr``."""

@@ -25,9 +25,14 @@ diagnosed when none is left: ``resolution``); its tests pay for its own length i
 the budget above, which counts a window every T/2 and so overstates a snapshot sensor's
 tests an hour: conservative.
 
-A window is not diagnosed while the shaft speed is known only to within more than ±2 %
-(a nameplate speed the 1x line has not confirmed yet): every part's comb then slides over
-several percent and can fit a healthy machine's lines (not diagnosed: ``speed``).
+A nameplate speed the vibration has not confirmed (no shaft line family in the raw or the
+envelope spectrum, :func:`.shaft_speed.confirm_speed`) is tested over its whole tolerance,
+paid for (the combs slide over it and each p-value pays for the wider search,
+:mod:`.fault_combs`), and the scores and ``/diagnostics`` say that the speed is unconfirmed.
+Such a window can be NORMAL, but a comb significant there is not called: sliding over ±10 %
+it can fit the machine's own lines (measured on HIT-SM's healthy records told 7 % off: an
+inner-race comb on the shaft harmonics of the true speed). The window is then not diagnosed
+(``speed``), until the speed is confirmed.
 
 The thesis' blocks of every observer stream that carries a model or a train are measured
 over the same samples (:mod:`bearing_diagnoser.decision.thesis_blocks`). A window whose
@@ -56,9 +61,8 @@ from .evidence_stream import EvidenceStream, WindowEvidence
 from .fault_combs import HYPOTHESES
 from .window_label import label_window, significance_level
 
-#: Relative speed uncertainty above which a window is not diagnosed: a nameplate speed the vibration has
-#: not confirmed (no 1x line yet) lets every part's comb slide over several percent, where each can
-#: fit a healthy machine's lines (the shaft speed told by a tachometer or a rig: 2 %, σ = 1 %).
+#: Relative speed uncertainty above which a told speed is reported unconfirmed: a tachometer's or a rig's
+#: measured speed (2 %, σ = 1 %) is not; a nameplate's (10 %) the vibration has not confirmed is.
 UNSURE_SPEED = 0.01
 
 
@@ -68,8 +72,9 @@ class SpectralScores(WindowScores):
     hypothesis the comb's best scale ρ of the kinematic frequencies, the long horizon's
     significance alone (``long``: its statistic ÷ threshold) and the posterior (with NORMAL's);
     the window's demodulation band; the shaft rate used (Hz) with its uncertainty, the told
-    rate (NaN: none told) and whether the measured one disagrees with it beyond the told
-    tolerance (1) or not (0); the seconds of signal the long horizon rests on (snapshots: the
+    rate (NaN: none told), whether the measured one disagrees with it beyond the told
+    tolerance (1) or not (0), and whether the told one is unconfirmed (1: tested over its whole
+    tolerance, :data:`UNSURE_SPEED`); the seconds of signal the long horizon rests on (snapshots: the
     seconds they hold, not the pauses between them)."""
 
     rho: dict = field(default_factory=dict)
@@ -80,6 +85,7 @@ class SpectralScores(WindowScores):
     speed_sigma_hz: float = math.nan
     told_speed_hz: float = math.nan
     speed_disagrees: float = 0.0
+    speed_unconfirmed: float = 0.0
     horizon_s: float = 0.0
 
     SUMMARY_KEYS = (*(h.label for h in HYPOTHESES),
@@ -87,6 +93,11 @@ class SpectralScores(WindowScores):
                     "band_low_hz", "band_high_hz", "speed_hz", "speed_sigma_hz", *THESIS_SUMMARY_KEYS)
 
     def speed_warning(self) -> str:
+        if self.speed_unconfirmed:
+            return (f"shaft speed not confirmed: told {60 * self.speed_hz:.0f} rpm "
+                    f"± {200 * self.speed_sigma_hz / self.speed_hz:.0f} %, no shaft line family in the "
+                    "vibration; tested over that whole range (a tachometer on shaft_speed, or a smaller "
+                    "rpm_tolerance, sharpens the decision)")
         if not self.speed_disagrees:
             return ""
         return (f"measured shaft speed {60 * self.speed_hz:.1f} rpm disagrees with the told "
@@ -102,7 +113,8 @@ class SpectralScores(WindowScores):
         if self.band is not None:
             out.update(band_low_hz=self.band.low, band_high_hz=self.band.high, band_candidates=self.band.candidates)
         out.update(speed_hz=self.speed_hz, speed_sigma_hz=self.speed_sigma_hz, told_speed_hz=self.told_speed_hz,
-                   speed_disagrees=self.speed_disagrees, horizon_s=self.horizon_s, rms=self.rms)
+                   speed_disagrees=self.speed_disagrees, speed_unconfirmed=self.speed_unconfirmed,
+                   horizon_s=self.horizon_s, rms=self.rms)
         out.update(self.thesis_items())
         out.update({f"{h.label}_posterior": p for h, p in self.posterior.items()})
         return out
@@ -164,12 +176,14 @@ class SpectralFrontEnd:
         long = {h: e.log10p for h, e in w.long.items() if h in short}
         both = {h: min(lp, long.get(h, 0.0)) for h, lp in short.items()}
         level = significance_level(alpha, len(both)) if both else 1.0  # none: a sensor problem
+        unconfirmed = w.speed_source == "told" and w.speed_sigma > UNSURE_SPEED * w.speed_hz
         scores = SpectralScores(rms=w.sensor.rms, significance={h: lp / level for h, lp in both.items()},
                                 rho={h: e.rho for h, e in w.evidence.items()},
                                 long={h: lp / level for h, lp in long.items()}, band=w.band, speed_hz=w.speed_hz,
                                 speed_sigma_hz=w.speed_sigma,
                                 told_speed_hz=math.nan if w.told_hz is None else w.told_hz,
                                 speed_disagrees=float(w.speed_source == "measured"),
+                                speed_unconfirmed=float(unconfirmed),
                                 horizon_s=w.horizon_windows * (w.end - w.start) / self.fs, untested=w.untested)
         _thesis_blocks(scores, streams, w.start, w.end)
         if not w.sensor.ok:
@@ -179,12 +193,11 @@ class SpectralFrontEnd:
                 f"a {t1 - t0:.3g} s snapshot resolves {self.fs / (w.end - w.start):.3g} Hz, too coarse at "
                 f"{60 * w.speed_hz:.0f} rpm for every hypothesis: "
                 + "; ".join(f"{h.label}: {why}" for h, why in w.untested.items())))
-        if w.speed_source == "told" and w.speed_sigma > UNSURE_SPEED * w.speed_hz:
+        evidence = sorted(h.label for h, lp in both.items() if lp < level)
+        if unconfirmed and evidence:  # evidence at a speed the machine has not confirmed (module docstring)
             return WindowVerdict.undiagnosed(t0, t1, scores, SPEED, (
-                f"shaft speed not confirmed: told {60 * w.speed_hz:.0f} rpm "
-                f"± {200 * w.speed_sigma / w.speed_hz:.0f} %, "
-                "no 1x line in the vibration (yet); a tachometer on shaft_speed, or a smaller rpm_tolerance, "
-                "lets the decision tell the parts apart"))
+                f"shaft speed not confirmed: told {60 * w.speed_hz:.0f} rpm ± {200 * w.speed_sigma / w.speed_hz:.0f} "
+                f"%, and the {', '.join(evidence)} comb sliding over that range can fit the machine's own lines"))
         label, confidence, post = label_window(both, alpha)
         scores.posterior = post
         seen, held = _label(short, alpha), _label(long, alpha)
