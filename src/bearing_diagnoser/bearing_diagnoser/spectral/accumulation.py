@@ -46,7 +46,8 @@ from .significance import averaged_median
 class CombGeometry:
     """What the combs are tested at: shaft rate ``fr`` (Hz) and its uncertainty ``sigma`` (Hz), the window
     (samples) at sample rate ``fs`` (Hz), the slip range ``rho``, the ``terms`` per hypothesis
-    (:func:`.fault_combs.comb_terms`), the highest tested envelope frequency ``f_top`` (Hz)."""
+    (:func:`.fault_combs.comb_terms`), the highest tested envelope frequency ``f_top`` (Hz), the machine's
+    own envelope lines ``known`` (Hz, :mod:`.machine_reference`: no comb term on them counts)."""
 
     fs: float
     fr: float
@@ -55,6 +56,7 @@ class CombGeometry:
     rho: tuple[float, float]
     terms: dict = field(compare=False)
     f_top: float = 0.0
+    known: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False)
 
     def same_bins(self, other: CombGeometry) -> bool:
         """Whether ``other``'s combs fall in the same bins: window unchanged, shaft rate within half a bin
@@ -156,7 +158,7 @@ class Accumulation:
         best = None
         for spectra, index in rows:
             lp, rho, s, j = comb_evidence(spectra, self.df, g.fr, {h: g.terms[h]}, g.rho, self.mask_shaft, n_bands,
-                                          self.windows, exclude)[h]
+                                          self.windows, np.r_[exclude, g.known])[h]
             r = int(np.argmin(lp))
             if best is None or lp[r] < best[0].log10p:
                 i, row = index[r]

@@ -152,6 +152,9 @@ class EvidenceStream:
         if hz is None:
             self._told = None
             return
+        if self.settings.reference is not None:  # the learnt speed relationship (:mod:`.machine_reference`)
+            hz, tolerance = self.settings.reference.correct_speed(hz, tolerance or self.settings.told_tolerance,
+                                                                  self.settings.told_tolerance)
         tol = self.settings.told_tolerance if tolerance is None or not self.settings.refine_speed else tolerance
         self._told = (float(hz), float(tol))
         measured = self.speed is not None and self.speed[2] in ("refined", "measured")
@@ -222,8 +225,8 @@ class EvidenceStream:
         self._set_geometry(fr, sigma)
         usable = self.usable_bandwidth or 0.45 * self.fs
         self.band = choose_band(x, self.fs, self.f_top, usable, fr, self.terms, self.rho, s.prewhiten, s.mask_shaft,
-                                s.band_criterion)
-        geometry = CombGeometry(self.fs, fr, sigma, self.window, self.rho, self.terms, self.f_top)
+                                s.band_criterion, s.known_lines(fr))
+        geometry = CombGeometry(self.fs, fr, sigma, self.window, self.rho, self.terms, self.f_top, s.known_lines(fr))
         if self.long is not None and self.long.geometry is not None and self.long.geometry.same_bins(geometry):
             self.long.retune(geometry)
         elif self.long is not None:
@@ -340,7 +343,8 @@ class EvidenceStream:
         s = self.settings
         ses, df = band_ses(spectrum, n, self.fs, np.array([[band.low, band.high]]), f_top)
         z = normalise(ses)
-        found = comb_evidence(z, df, fr, terms, self.rho, s.mask_shaft, band.candidates)
+        known = s.known_lines(fr, (band.low, band.high))  # the machine's own lines (:mod:`.machine_reference`)
+        found = comb_evidence(z, df, fr, terms, self.rho, s.mask_shaft, band.candidates, exclude=known)
         evidence = {h: CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
                     for h, (lp, rho, stat, j) in found.items()}
         if len(evidence) > 1:  # the others without the strongest one's lines (:mod:`.accumulation`)
@@ -348,7 +352,7 @@ class EvidenceStream:
             held = term_frequencies(terms, strongest, evidence[strongest].rho, fr)
             others = {h: terms[h] for h in evidence if h != strongest}
             for h, (lp, rho, stat, j) in comb_evidence(z, df, fr, others, self.rho, s.mask_shaft, band.candidates,
-                                                       exclude=held).items():
+                                                       exclude=np.r_[held, known]).items():
                 evidence[h] = CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
         for h, e in evidence.items():  # distinct evidence only (:mod:`.accumulation`)
             if e.log10p == 0.0:
@@ -381,14 +385,14 @@ class EvidenceStream:
         f_top = highest_term(terms, self.rho[1]) * fr
         usable = self.usable_bandwidth or 0.45 * self.fs
         band = choose_band(x, self.fs, f_top, usable, fr, terms, self.rho, s.prewhiten, s.mask_shaft,
-                           s.band_criterion)
+                           s.band_criterion, s.known_lines(fr))
         if band is None:
             return None
         spectrum = window_spectrum(x, s.prewhiten)
         evidence = self._evidence(spectrum, x.size, band, terms, f_top, fr, end)
         if self.long is None:
             return WindowEvidence(start, end, evidence, band, fr, sigma, source, sensor, told, untested=untested)
-        geometry = CombGeometry(self.fs, fr, sigma, x.size, self.rho, terms, f_top)
+        geometry = CombGeometry(self.fs, fr, sigma, x.size, self.rho, terms, f_top, s.known_lines(fr))
         held = self.long.geometry
         if held is not None and held.same_bins(geometry) and held.terms.keys() == terms.keys():
             self.long.retune(geometry)
