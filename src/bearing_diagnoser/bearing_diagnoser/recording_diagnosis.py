@@ -121,7 +121,7 @@ def learn_recording_reference(rec: Recording, model_set: str | None = None, rpm:
     x, _ = _at_rate(rec, fs, chosen.name)
     try:
         return learn_reference(x, fs, bearing, rpm or rec.rpm, tolerance, cfg.front_end, cfg.usable_bandwidth,
-                               f"{rec.path or 'healthy recording'}, first {min(rec.duration, 60.0):.1f} s")
+                               rec.path or "healthy recording")
     except MachineReferenceError as exc:
         raise InputError(f"baseline {rec.path}: {exc}") from None
 

@@ -90,6 +90,9 @@ SAME_SPEED = 0.02
 #: Supply frequencies (Hz) whose multiples do not follow the shaft speed.
 SUPPLY_HZ = (50.0, 60.0)
 
+#: Offsets (bins) of the points that stand for a line's Hann main lobe in :meth:`MachineReference.known_lines`.
+MAIN_LOBE_POINTS = np.array([-0.5, 0.0, 0.5])
+
 FORMAT = "bearing_diagnoser machine reference"
 VERSION = 1
 
@@ -162,12 +165,15 @@ class MachineReference:
     def known_lines(self, fr: float, band: tuple[float, float] | None = None) -> np.ndarray:
         """Frequencies (Hz) of the reference's envelope lines at shaft rate ``fr`` (Hz) in ``band`` (the
         union over every band when None or not learnt): orders × ``fr`` within the speed range, supply
-        multiples in Hz at any speed (module docstring)."""
+        multiples in Hz at any speed (module docstring). Each line is given as its Hann main lobe,
+        ±2 bins of the window: three points half a bin apart, each of which holds 1.5 bins around it
+        (:func:`.fault_combs.comb_evidence`): a stationary line's skirt adds the same excess every
+        window, which the long horizon would otherwise accumulate into evidence."""
         chosen = [b for b in self.envelope if band is not None and np.allclose(b.band, band)] or self.envelope
         in_range = self.speed_range_hz[0] <= fr <= self.speed_range_hz[1]
         out = [line.order * fr if line.follows_speed else line.hz for b in chosen for line in b.lines
                if in_range or not line.follows_speed]
-        return np.unique(np.asarray(out, float))
+        return np.unique((np.asarray(out, float)[:, None] + MAIN_LOBE_POINTS * self.bin_width).ravel())
 
     def describe(self) -> str:
         """One line: where it was learnt, the speed relationship, the lines."""
@@ -337,7 +343,7 @@ def _follows_speed(hz: float, fr: float, df: float) -> bool:
     """False for a supply multiple (within a bin) that is no shaft harmonic (within a bin)."""
     shaft = abs(hz - round(hz / fr) * fr) <= df
     supply = any(round(hz / f) >= 1 and abs(hz - round(hz / f) * f) <= df for f in SUPPLY_HZ)
-    return shaft or not supply
+    return bool(shaft or not supply)
 
 
 def _raw_lines(x: np.ndarray, fs: float, fr: float, f_max: float, buffer_s: float) -> tuple[ReferenceLine, ...]:
