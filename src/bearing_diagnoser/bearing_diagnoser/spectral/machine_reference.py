@@ -47,7 +47,6 @@ import json
 import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.fft import next_fast_len
@@ -60,9 +59,6 @@ from .envelope_spectrum import band_ses, hanning, normalise, window_spectrum
 from .fault_combs import comb_terms, highest_term, rho_range
 from .shaft_speed import N_HARMONICS, estimate_speed
 from .significance import averaged_comb_log10p, averaged_median
-
-if TYPE_CHECKING:
-    from .settings import SpectralSettings
 
 #: Chance that Gaussian noise puts one line anywhere in the bins tested (all bands together).
 LINE_FALSE_ALARM = 0.01
@@ -224,11 +220,12 @@ def load_reference(path) -> MachineReference:
 
 # -- learning -------------------------------------------------------------------------------
 def learn_reference(x: np.ndarray, fs: float, bearing: Bearing, told_rpm: float | None, tolerance: float,
-                    settings: SpectralSettings, usable_bandwidth: float = 0.0, source: str = "") -> MachineReference:
+                    settings, usable_bandwidth: float = 0.0, source: str = "") -> MachineReference:
     """Learn the reference from the healthy signal ``x`` (m/s², ``fs`` Hz; its first :data:`MAX_PERIOD_S`)
     of a machine with ``bearing``, told to turn at ``told_rpm`` (None: unknown) within the relative
-    ``tolerance``, for the decision ``settings`` (window, prewhitening, speed search); bands up to the
-    sensor's ``usable_bandwidth`` (Hz; 0: 0.45·fs). ``source`` says where the signal came from.
+    ``tolerance``, for the decision's :class:`.settings.SpectralSettings` ``settings`` (window,
+    prewhitening, speed search); bands up to the sensor's ``usable_bandwidth`` (Hz; 0: 0.45·fs).
+    ``source`` says where the signal came from.
 
     Raises :class:`MachineReferenceError` (one line) when the signal cannot give one: too short for
     :data:`MIN_WINDOWS` windows, a sensor problem in most windows, no shaft speed told or found.
@@ -273,7 +270,7 @@ def learn_reference(x: np.ndarray, fs: float, bearing: Bearing, told_rpm: float 
                             float(fr), ratio, scatter, (lo, hi), float(df), len(good), tuple(envelope), raw)
 
 
-def _speed(x: np.ndarray, fs: float, told_hz: float | None, tolerance: float, settings: SpectralSettings):
+def _speed(x: np.ndarray, fs: float, told_hz: float | None, tolerance: float, settings):
     """(shaft rate Hz, ratio measured/told or None, its relative scatter, the buffers' measured rates)."""
     n = max(1, int(settings.buffer_s * fs))
     lo, hi = (told_hz * (1 - tolerance), told_hz * (1 + tolerance)) if told_hz else settings.blind_range_hz
