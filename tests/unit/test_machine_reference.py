@@ -178,3 +178,10 @@ def test_the_node_learns_over_its_baseline_period_saves_it_and_a_restart_loads_i
     broken, _ = session(reference_file=str(path))
     assert broken.health(0.0).values["machine reference"].startswith("none, deciding blind") \
         and path.read_text() == "{"  # never overwritten
+
+
+def test_a_known_line_that_has_grown_well_above_its_learnt_level_counts_again():
+    reference = learn_recording_reference(recording(healthy(10.0, 1, depth=0.2)))
+    assert states(diagnose_recording(recording(healthy(10.0, 2, depth=0.2)), baseline=reference)) == [FaultState.NORMAL]
+    grown = diagnose_recording(recording(healthy(10.0, 2, depth=0.6)), baseline=reference)  # 9 x its power
+    assert FaultState.OUTER_RACE in states(grown)

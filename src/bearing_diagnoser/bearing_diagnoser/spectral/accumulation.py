@@ -31,6 +31,7 @@ not decide between them).
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -47,7 +48,8 @@ class CombGeometry:
     """What the combs are tested at: shaft rate ``fr`` (Hz) and its uncertainty ``sigma`` (Hz), the window
     (samples) at sample rate ``fs`` (Hz), the slip range ``rho``, the ``terms`` per hypothesis
     (:func:`.fault_combs.comb_terms`), the highest tested envelope frequency ``f_top`` (Hz), the machine's
-    own envelope lines ``known`` (Hz, :mod:`.machine_reference`: no comb term on them counts)."""
+    own envelope lines: ``known(spectrum, df, k)`` gives those (Hz) that have not grown in a spectrum of k
+    windows (:mod:`.machine_reference`: no comb term on them counts)."""
 
     fs: float
     fr: float
@@ -56,7 +58,7 @@ class CombGeometry:
     rho: tuple[float, float]
     terms: dict = field(compare=False)
     f_top: float = 0.0
-    known: np.ndarray = field(default_factory=lambda: np.empty(0), compare=False)
+    known: Callable = field(default=lambda spectrum, df, k: np.empty(0), compare=False)
 
     def same_bins(self, other: CombGeometry) -> bool:
         """Whether ``other``'s combs fall in the same bins: window unchanged, shaft rate within half a bin
@@ -158,7 +160,7 @@ class Accumulation:
         best = None
         for spectra, index in rows:
             lp, rho, s, j = comb_evidence(spectra, self.df, g.fr, {h: g.terms[h]}, g.rho, self.mask_shaft, n_bands,
-                                          self.windows, np.r_[exclude, g.known])[h]
+                                          self.windows, np.r_[exclude, g.known(spectra, self.df, self.windows)])[h]
             r = int(np.argmin(lp))
             if best is None or lp[r] < best[0].log10p:
                 i, row = index[r]

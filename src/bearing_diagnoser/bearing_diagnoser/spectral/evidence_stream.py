@@ -31,6 +31,10 @@ lines keeps the last measurement. Terms two hypotheses could both match at one s
 (:func:`.fault_combs.drop_ambiguous`); a line one hypothesis explains is taken from the
 others before they are tested (explain-away), in the window as in the long horizon.
 
+With the machine's own healthy reference (``settings.reference``, :mod:`.machine_reference`) the
+told speed is corrected by its learnt ratio, and its envelope lines are held by another
+explanation in every comb test (window, band choice, long horizon): no comb term on them counts.
+
 Only past data enter a decision (causal). A gap in the samples restarts the schedule.
 
 Snapshots (a snapshot sensor's chunks, :mod:`bearing_common.chunk_stream`): the pause before
@@ -46,6 +50,7 @@ horizon at that geometry (a sensor's snapshots are all equally long).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from scipy.fft import next_fast_len
@@ -226,7 +231,8 @@ class EvidenceStream:
         usable = self.usable_bandwidth or 0.45 * self.fs
         self.band = choose_band(x, self.fs, self.f_top, usable, fr, self.terms, self.rho, s.prewhiten, s.mask_shaft,
                                 s.band_criterion, s.known_lines(fr))
-        geometry = CombGeometry(self.fs, fr, sigma, self.window, self.rho, self.terms, self.f_top, s.known_lines(fr))
+        geometry = CombGeometry(self.fs, fr, sigma, self.window, self.rho, self.terms, self.f_top,
+                                partial(s.known_lines, fr, None))
         if self.long is not None and self.long.geometry is not None and self.long.geometry.same_bins(geometry):
             self.long.retune(geometry)
         elif self.long is not None:
@@ -343,7 +349,7 @@ class EvidenceStream:
         s = self.settings
         ses, df = band_ses(spectrum, n, self.fs, np.array([[band.low, band.high]]), f_top)
         z = normalise(ses)
-        known = s.known_lines(fr, (band.low, band.high))  # the machine's own lines (:mod:`.machine_reference`)
+        known = s.known_lines(fr, (band.low, band.high), z, df)  # the machine's own lines (:mod:`.machine_reference`)
         found = comb_evidence(z, df, fr, terms, self.rho, s.mask_shaft, band.candidates, exclude=known)
         evidence = {h: CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
                     for h, (lp, rho, stat, j) in found.items()}
@@ -392,7 +398,7 @@ class EvidenceStream:
         evidence = self._evidence(spectrum, x.size, band, terms, f_top, fr, end)
         if self.long is None:
             return WindowEvidence(start, end, evidence, band, fr, sigma, source, sensor, told, untested=untested)
-        geometry = CombGeometry(self.fs, fr, sigma, x.size, self.rho, terms, f_top, s.known_lines(fr))
+        geometry = CombGeometry(self.fs, fr, sigma, x.size, self.rho, terms, f_top, partial(s.known_lines, fr, None))
         held = self.long.geometry
         if held is not None and held.same_bins(geometry) and held.terms.keys() == terms.keys():
             self.long.retune(geometry)

@@ -86,6 +86,12 @@ SAME_SPEED = 0.02
 #: Supply frequencies (Hz) whose multiples do not follow the shaft speed.
 SUPPLY_HZ = (50.0, 60.0)
 
+#: Power ratio over its learnt level at which a known line has grown and counts as evidence again:
+#: twice the amplitude (+6 dB), the alert step over a machine's baseline common in condition-monitoring
+#: practice (ISO 13373-1 and ISO 17359 leave the levels to it). The learnt level is a mean over
+#: windows; a healthy line's window-to-window scatter rarely doubles its amplitude.
+GROWTH = 4.0
+
 #: Offsets (bins) of the points that stand for a line's Hann main lobe in :meth:`MachineReference.known_lines`.
 MAIN_LOBE_POINTS = np.array([-0.5, 0.0, 0.5])
 
@@ -158,18 +164,29 @@ class MachineReference:
             return hz, min(tolerance, max(3.0 * self.ratio_scatter, floor))
         return hz, tolerance
 
-    def known_lines(self, fr: float, band: tuple[float, float] | None = None) -> np.ndarray:
+    def known_lines(self, fr: float, band: tuple[float, float] | None = None, spectrum: np.ndarray | None = None,
+                    df: float = 0.0, k: int = 1) -> np.ndarray:
         """Frequencies (Hz) of the reference's envelope lines at shaft rate ``fr`` (Hz) in ``band`` (the
         union over every band when None or not learnt): orders × ``fr`` within the speed range, supply
         multiples in Hz at any speed (module docstring). Each line is given as its Hann main lobe,
         ±2 bins of the window: three points half a bin apart, each of which holds 1.5 bins around it
         (:func:`.fault_combs.comb_evidence`): a stationary line's skirt adds the same excess every
-        window, which the long horizon would otherwise accumulate into evidence."""
+        window, which the long horizon would otherwise accumulate into evidence.
+
+        Judged by what is new: given the normalised ``spectrum`` under test (rows, bins; bin width ``df``
+        Hz; the mean of ``k`` windows), a line whose value there (the largest over the rows, within a
+        bin) exceeds :data:`GROWTH` × its learnt level (in the same normalisation) has grown and is not
+        known any more: a fault on a line the healthy machine carried counts."""
         chosen = [b for b in self.envelope if band is not None and np.allclose(b.band, band)] or self.envelope
         in_range = self.speed_range_hz[0] <= fr <= self.speed_range_hz[1]
-        out = [line.order * fr if line.follows_speed else line.hz for b in chosen for line in b.lines
-               if in_range or not line.follows_speed]
-        return np.unique((np.asarray(out, float)[:, None] + MAIN_LOBE_POINTS * self.bin_width).ravel())
+        lines = np.asarray([(line.order * fr if line.follows_speed else line.hz, line.level) for b in chosen
+                            for line in b.lines if in_range or not line.follows_speed], float).reshape(-1, 2)
+        f, level = lines[:, 0], lines[:, 1]
+        if spectrum is not None and f.size:
+            z = np.atleast_2d(spectrum).max(axis=0)
+            i = np.clip(np.rint(f / df).astype(int)[:, None] + np.arange(-1, 2), 0, z.size - 1)
+            f = f[z[i].max(axis=1) < GROWTH * level * averaged_median(k)[1] / math.log(2.0)]
+        return np.unique((f[:, None] + MAIN_LOBE_POINTS * self.bin_width).ravel())
 
     def describe(self) -> str:
         """One line: where it was learnt, the speed relationship, the lines."""

@@ -97,10 +97,11 @@ class SpectralSettings:
     def with_reference(self, reference: MachineReference | None) -> SpectralSettings:
         return replace(self, reference=reference)
 
-    def known_lines(self, fr: float, band: tuple[float, float] | None = None) -> np.ndarray:
-        """The reference's envelope lines (Hz) at shaft rate ``fr`` (Hz) in ``band``
-        (:meth:`.machine_reference.MachineReference.known_lines`); none without a reference."""
-        return np.empty(0) if self.reference is None else self.reference.known_lines(fr, band)
+    def known_lines(self, fr: float, band: tuple[float, float] | None = None, spectrum: np.ndarray | None = None,
+                    df: float = 0.0, k: int = 1) -> np.ndarray:
+        """The reference's envelope lines (Hz) at shaft rate ``fr`` (Hz) in ``band`` that have not grown in
+        ``spectrum`` (:meth:`.machine_reference.MachineReference.known_lines`); none without a reference."""
+        return np.empty(0) if self.reference is None else self.reference.known_lines(fr, band, spectrum, df, k)
 
     def textbook(self) -> SpectralSettings:
         """:data:`BASELINE` with this decision's speed handling (tolerance, blind range); blind (no reference)."""
