@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 
 from bearing_common.bearings import Bearing, BearingError
 
+from .spectral.machine_reference import MachineReference
+
 #: Exit status of a file that is bad input (as ``bearing-diagnose`` exits for it).
 EXIT_BAD_INPUT = 2
 
@@ -45,7 +47,7 @@ class FileOptions:
     batch are those of its own run): sample rate (Hz), shaft speed (rev/min) and its relative
     tolerance, channel, units or sensitivity of a file that does not state what its numbers measure,
     the file's speed or tachometer channel (its units, pulses per revolution), bearing (None: the
-    recording's), model set, method."""
+    recording's), model set, method, the machine's healthy reference (None: blind)."""
 
     sample_rate: float | None = None
     rpm: float | None = None
@@ -59,6 +61,7 @@ class FileOptions:
     bearing: Bearing | None = None
     model_set: str | None = None
     method: str = "model"
+    baseline: MachineReference | None = None
 
 
 @dataclass
@@ -101,7 +104,6 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
     """Diagnose the recording at ``path`` (module docstring); ``plot_dir``: write its figures there;
     ``report_path``: write its HTML report there; ``emit``: called with each note as it arises
     (else they are only collected)."""
-    from bearing_recordings.load import load_recording
     from bearing_recordings.recording import InputError
 
     from .recording_diagnosis import diagnose_recording
@@ -116,10 +118,7 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
         log.setLevel(logging.INFO)
     cpu = time.process_time()
     try:
-        rec = load_recording(path, sample_rate=options.sample_rate, rpm=options.rpm, channel=options.channel,
-                             units=options.units, sensitivity=options.sensitivity,
-                             speed_channel=options.speed_channel, speed_units=options.speed_units,
-                             pulses_per_rev=options.pulses_per_rev)
+        rec = _load(path, options)
         report.signal_s = rec.duration
         for note in rec.notes or ():
             notes.emit_note(note)
@@ -130,7 +129,8 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
                             f"the mean {rec.rpm:.0f} rpm")
         res = diagnose_recording(rec, model_set=options.model_set, method=options.method, rpm=options.rpm,
                                  bearing=options.bearing or rec.bearing,
-                                 keep_streams=plot_dir is not None, rpm_tolerance=options.rpm_tolerance)
+                                 keep_streams=plot_dir is not None, rpm_tolerance=options.rpm_tolerance,
+                                 baseline=options.baseline)
     except (InputError, BearingError) as exc:
         report.error, report.status = str(exc), EXIT_BAD_INPUT
         return report
@@ -142,13 +142,41 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
     for start, end, problem in res.not_diagnosed[:1]:
         notes.emit_note(f"warning: {len(res.not_diagnosed)} of {len(res.decisions)} windows not diagnosed, first at "
                         f"{start:.3f}-{end:.3f} s: {problem}")
-    report.lines = [seg.to_json() for seg in res.segments]
+    said = {"reference": res.reference} if res.reference else {}
+    report.lines = [seg.to_json() | said for seg in res.segments]
     report.summary = summarise(res, rec, res.bearing)
     if plot_dir is not None:
         _write_figures(res, plot_dir, report, notes)
     if report_path is not None:
         _write_report(res, rec, report_path, report, notes)
     return report
+
+
+def _load(path: str, options: FileOptions):
+    """The recording at ``path`` read with ``options`` (InputError when it cannot be)."""
+    from bearing_recordings.load import load_recording
+
+    return load_recording(path, sample_rate=options.sample_rate, rpm=options.rpm, channel=options.channel,
+                          units=options.units, sensitivity=options.sensitivity, speed_channel=options.speed_channel,
+                          speed_units=options.speed_units, pulses_per_rev=options.pulses_per_rev)
+
+
+def load_baseline(path: str, options: FileOptions) -> MachineReference:
+    """The machine reference of ``--baseline``: a saved one (``.json``), else learnt from the healthy
+    recording at ``path`` read with the run's ``options`` like every file; InputError (one line)."""
+    from bearing_recordings.recording import InputError
+
+    from .recording_diagnosis import learn_recording_reference
+    from .spectral.machine_reference import MachineReferenceError, load_reference
+
+    if path.lower().endswith(".json"):
+        try:
+            return load_reference(path)
+        except MachineReferenceError as exc:
+            raise InputError(str(exc)) from None
+    rec = _load(path, options)
+    return learn_recording_reference(rec, options.model_set, options.rpm, options.bearing or rec.bearing,
+                                     options.rpm_tolerance)
 
 
 def _write_figures(res, plot_dir: str, report: FileReport, notes: _Notes) -> None:

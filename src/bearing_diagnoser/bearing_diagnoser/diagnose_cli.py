@@ -4,6 +4,7 @@
                      [--channel NAME] [--bearing NAME|FILE.yaml] [--units g|m/s2 | --sensitivity S]
                      [--model-set NAME] [--speed-channel NAME --speed-units rpm|rad/s|hz|pulses
                      [--pulses-per-rev N]] [--method model|envelope] [--plot DIR] [--report DIR] [--json]
+                     [--baseline HEALTHY_PATH|REF.json [--save-baseline REF.json]]
 
 PATH is a .npz (a real machine's recording unless its ``source`` says ``simulator``, as
 ``bearing-sim`` writes: ``bearing_recordings.npz_files``), a MATLAB recording (CWRU, MFPT, or
@@ -18,6 +19,12 @@ model set, bearing, any resampling, the speed, the windows not diagnosed (each f
 with it in a batch), and per file that cannot be diagnosed one ``error:`` line. The options
 apply to every file as they would to it alone, so a file's lines in a batch are those of its
 own run.
+
+``--baseline`` judges every file against the machine's own healthy reference
+(:mod:`.spectral.machine_reference`): learnt once from a healthy recording of the same machine, read
+with the same options as the files (its first 60 s), or loaded from a reference saved before with
+``--save-baseline``. Each JSON line then carries ``"reference"`` (what was learnt, from where), and
+stderr says which reference is in force; without it the blind decision runs.
 
 Every readable recording gets a verdict. A window the decision cannot diagnose (the sensor
 signal dead, clipped, quantised; the shaft speed not confirmed; a snapshot too short to
@@ -39,6 +46,7 @@ import argparse
 import json
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 EXIT_BAD_INPUT = 2
@@ -85,6 +93,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="DIR", help="write figures to DIR (with several files: DIR/<file name>/)")
     p.add_argument("--report", metavar="DIR",
                    help="write one self-contained HTML page per file to DIR/<file name>.html")
+    p.add_argument("--baseline", metavar="HEALTHY_PATH|REF.json",
+                   help="judge against this machine's own healthy reference: a healthy recording of the same machine "
+                        "(read with the same options as PATH), or a reference saved with --save-baseline")
+    p.add_argument("--save-baseline", metavar="REF.json",
+                   help="save the reference of --baseline to REF.json, for reuse (e.g. --baseline REF.json)")
     p.add_argument("--json", action="store_true",
                    help="JSON lines on stdout also on a terminal (they are the default when stdout is not one)")
     return p
@@ -110,7 +123,7 @@ def _options(args):
     from bearing_recordings.measurement_units import parse_sensitivity
     from bearing_recordings.recording import InputError, check_rate, check_rpm
 
-    from .batch_diagnosis import FileOptions
+    from .batch_diagnosis import FileOptions, load_baseline
 
     if args.rpm_tolerance is not None and not 0.0 < args.rpm_tolerance < 0.5:
         raise InputError(f"--rpm-tolerance must be in (0, 0.5), got {args.rpm_tolerance:g}")
@@ -124,13 +137,24 @@ def _options(args):
         raise InputError("give --units or --sensitivity, not both")
     if args.sensitivity is not None:
         parse_sensitivity(args.sensitivity)
-    return FileOptions(sample_rate=None if args.sample_rate is None else check_rate(args.sample_rate),
+    if args.save_baseline and not args.baseline:
+        raise InputError("--save-baseline needs --baseline (the healthy recording to learn from)")
+    options = FileOptions(sample_rate=None if args.sample_rate is None else check_rate(args.sample_rate),
                        rpm=None if args.rpm is None else check_rpm(args.rpm), rpm_tolerance=args.rpm_tolerance,
                        channel=args.channel, units=args.units, sensitivity=args.sensitivity,
                        speed_channel=args.speed_channel, speed_units=args.speed_units,
                        pulses_per_rev=args.pulses_per_rev,
                        bearing=load_bearing(args.bearing) if args.bearing else None, model_set=args.model_set,
                        method=args.method)
+    if not args.baseline:
+        return options
+    reference = load_baseline(args.baseline, options)
+    if args.save_baseline:
+        try:
+            reference.save(args.save_baseline)
+        except OSError as exc:
+            raise InputError(f"cannot save the machine reference to {args.save_baseline}: {exc.strerror}") from None
+    return replace(options, baseline=reference)
 
 
 def _file_names(paths: list[str]) -> list[str]:

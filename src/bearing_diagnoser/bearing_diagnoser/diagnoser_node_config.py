@@ -56,6 +56,10 @@ PARAMETERS = (
     ParameterSpec("baseline", "30", "the healthy baseline of the condition trend: the first N windows or "
                   "snapshots (a count, spanning at least baseline_min_duration), or a stated healthy period after "
                   "the first (a duration: 2h, 45min, 600s)", _problem(parse_baseline)),
+    ParameterSpec("reference_file", "", "the machine's own healthy reference (JSON, bearing-diagnose "
+                  "--save-baseline): loaded when the file exists; else learnt over the baseline period (at most 60 s "
+                  "of signal from the start, deciding blind meanwhile) and saved there, so that a restart does not "
+                  "learn again; empty = learnt and not saved"),
     ParameterSpec("baseline_min_duration", 600.0, "seconds the counted baseline spans at least (a stream's 1 s "
                   "windows then learn over 10 min, not 30 s); 0 = by count only", non_negative),
 )

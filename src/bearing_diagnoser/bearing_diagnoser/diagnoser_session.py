@@ -54,10 +54,11 @@ from .decision.scores import WindowScores
 from .decision.state_tracker import Decision
 from .diagnoser import STREAMS, Diagnoser
 from .diagnoser_node_config import LEVEL_STALE, LEVEL_WARN, RESTART_ON, STATE_LEVEL, TREND_LEVEL, health_settings
-from .front_ends import MODEL_SET_DEFAULTS, config_for
+from .front_ends import MODEL_SET_DEFAULTS, NO_REFERENCE, config_for, takes_reference, with_reference
 from .health.health_session import DecidedWindow, HealthSession
 from .health.indicators import fault_lines_top
 from .health.monitor import HealthRecord
+from .reference_session import ReferenceSession
 from .warm_up import warm_up
 
 #: Snapshot intervals a snapshot sensor may stay silent before /diagnostics reports it stale.
@@ -143,6 +144,9 @@ class DiagnoserSession:
         self.streams = {h: ChunkStream(topics.residual_topic(h).name, input_mode=values["input_mode"])
                         for h in STREAMS}
         self.condition = HealthSession(health_settings(values), log, keep_history)
+        # the machine's healthy reference (:mod:`.reference_session`); offline runs give theirs in ``config``
+        self.reference = ReferenceSession(values, log) if config is None else None
+        self._learn_from: FaultState | None = None  # the stream the reference learns from
         self._health_out: list[HealthRecord] = []
         self._envelope_taken = None  # the last spectrum handed out by take_envelope
         self.last_health: HealthRecord | None = None
@@ -197,7 +201,9 @@ class DiagnoserSession:
         if v["false_alarm_probability"] > 0:
             cfg = replace(cfg, pfa=float(v["false_alarm_probability"]))
         front_end = cfg.front_end.with_window(float(v["window"])).with_false_alarm_rate(float(v["false_alarm_rate"]))
-        return replace(cfg, usable_bandwidth=float(v["sensor_bandwidth"]), front_end=front_end)
+        cfg = replace(cfg, usable_bandwidth=float(v["sensor_bandwidth"]), front_end=front_end)
+        learnt = self.reference.reference if self.reference is not None else None
+        return with_reference(cfg, learnt) if takes_reference(cfg) else cfg
 
     def _make_core(self, model_set: str, sample_rate: float) -> Diagnoser:
         name = self.values["model_set"] or model_set
@@ -295,7 +301,9 @@ class DiagnoserSession:
         else:
             self.decision_problem = ""
         self._feed_condition(stamp, sample_rate, r if e is None else r + e, verdict, decisions or [])
-        return [] if decisions is None else self._published(decisions)
+        out = [] if decisions is None else self._published(decisions)
+        self._learn(hypothesis, index, sample_rate, r if e is None else r + e, verdict.snapshot)
+        return out
 
     def _core_index(self, hypothesis: FaultState, verdict, stamp: float, first_index: int, sample_rate: float,
                     n: int) -> int:
@@ -326,6 +334,21 @@ class DiagnoserSession:
         if records:
             self._health_out.extend(records)
             self.last_health = records[-1]
+
+    def _learn(self, hypothesis: FaultState, index: int, sample_rate: float, y: np.ndarray, snapshot: bool) -> None:
+        """The measurement to the machine reference while it learns (one stream's); once learnt, the
+        decision restarts judging against it."""
+        if self.reference is None or not self.reference.learning or not takes_reference(self.core.config):
+            return
+        self._learn_from = self._learn_from or hypothesis
+        if hypothesis != self._learn_from:
+            return
+        settings = self.core.config.front_end
+        told, tolerance = (self.shaft_rpm, settings.told_tolerance) if self.shaft_rpm is not None else (
+            float(self.values["rpm"]) or None, float(self.values["rpm_tolerance"]))
+        if self.reference.push(index, sample_rate, y, snapshot, self.bearing, told, tolerance, settings) is not None:
+            self._log("info", "the decision restarts with the machine reference")
+            self.core = None
 
     def take_envelope(self):
         """``(stamp s, view)``: the spectrum the decision tested in its last window
@@ -401,6 +424,9 @@ class DiagnoserSession:
         if self.untested:
             values["untested"] = "; ".join(f"{h.label}: {why}" for h, why in self.untested.items())
         values.update(self._condition_values())
+        if self.reference is not None:
+            fold = self.core is not None and not takes_reference(self.core.config)
+            values["machine reference"] = f"none: {NO_REFERENCE}" if fold else self.reference.status()
         if len(silent) == len(self.last_heard):
             return Health(LEVEL_STALE, "no residuals: " + ", ".join(silent), values)
         level, message = STATE_LEVEL[state], state.name

@@ -72,6 +72,26 @@ def envelope_baseline(config: DiagnoserConfig) -> DiagnoserConfig:
     return replace(config, front_end=config.front_end.textbook())
 
 
+NO_REFERENCE = ("a machine reference is used by the spectral decision (real machines) only, not by the fold "
+                "decision of the simulator's model sets")
+
+
+def takes_reference(config: DiagnoserConfig) -> bool:
+    """Whether ``config``'s front end judges against a machine reference (the spectral one)."""
+    return isinstance(config.front_end, SpectralSettings)
+
+
+def with_reference(config: DiagnoserConfig, reference) -> DiagnoserConfig:
+    """``config`` judging against the machine's own healthy reference
+    (:class:`.spectral.machine_reference.MachineReference`; None: blind, ``config`` as it is); ValueError
+    for the fold front end (the simulator's model sets), which takes none."""
+    if reference is None:
+        return config
+    if not takes_reference(config):
+        raise ValueError(NO_REFERENCE)
+    return replace(config, front_end=config.front_end.with_reference(reference))
+
+
 def build_front_end(config: DiagnoserConfig, sample_rate: float, bearing: Bearing) -> FrontEnd:
     """The front end of ``config`` for streams at ``sample_rate`` (Hz); ValueError when it cannot
     decide them."""

@@ -4,7 +4,10 @@
 the decision's configuration, resamples the recording to the set's rate, and feeds it in
 chunks through :class:`.pipeline.MonitorPipeline` (the OR and IR observer sessions and the
 diagnoser session). ``method="envelope"`` runs the textbook squared-envelope-spectrum
-reference on the measurement instead (:func:`.front_ends.envelope_baseline`).
+reference on the measurement instead (:func:`.front_ends.envelope_baseline`). With a ``baseline``
+(a healthy recording of the same machine, or a saved reference) the decision judges against the
+machine's own healthy reference (:mod:`.spectral.machine_reference`), learnt from it by
+:func:`learn_recording_reference` exactly as the recording itself is read (model set, rate, speed).
 :func:`diagnose_measurement` runs the decision of a model set on a measurement alone.
 
 What the run assumed (model set, resampling, speed) is logged (``logging``, logger
@@ -27,8 +30,10 @@ from .decision.config import DiagnoserConfig
 from .decision.segments import Segment, segments_from_decisions
 from .decision.state_tracker import Decision
 from .diagnoser import STREAMS
-from .front_ends import config_for, envelope_baseline
+from .diagnoser_node_config import PARAMETERS
+from .front_ends import NO_REFERENCE, config_for, envelope_baseline, takes_reference, with_reference
 from .pipeline import MonitorPipeline, choose_model_set
+from .spectral.machine_reference import MachineReference, MachineReferenceError, learn_reference
 
 LOG = logging.getLogger(__name__)
 
@@ -54,6 +59,7 @@ class OfflineResult:
     method: str = "model"
     not_diagnosed: list = field(default_factory=list)  # (start s, end s, NotDiagnosed) of the windows not diagnosed
     bearing: Bearing | None = None  # the bearing diagnosed
+    reference: str = ""  # the machine reference in force (MachineReference.describe()); "": none, blind
 
 
 def _speed(rec: Recording, rpm: float | None) -> float | None:
@@ -88,6 +94,38 @@ def _at_rate(rec: Recording, fs: float, model_set: str) -> tuple[np.ndarray, np.
     return x, truth
 
 
+def _told_tolerance(rec: Recording, rpm: float | None, rpm_tolerance: float | None) -> float | None:
+    """The relative tolerance of the speed a run is told: the given one, else the recording's own
+    statement for its own speed, else None (the diagnoser's default)."""
+    if rpm_tolerance is None and (rpm is None or rpm == rec.rpm):
+        return rec.rpm_tolerance
+    return rpm_tolerance
+
+
+def learn_recording_reference(rec: Recording, model_set: str | None = None, rpm: float | None = None,
+                              bearing: Bearing | None = None, rpm_tolerance: float | None = None,
+                              config: DiagnoserConfig | None = None) -> MachineReference:
+    """The machine reference learnt from the healthy recording ``rec`` (its first
+    :data:`.spectral.machine_reference.MAX_PERIOD_S`), read as :func:`diagnose_recording` reads a
+    recording with the same arguments (model set, rate, speed, tolerance, bearing); InputError (one
+    line) when it cannot give one."""
+    bearing = bearing or rec.bearing or CATALOG[DEFAULT_BEARING]
+    chosen = choose_model_set(rec.source, rec.sample_rate, bearing, model_set)
+    fs = chosen.sample_rate or rec.sample_rate
+    cfg = _decision_config(config or config_for(chosen.name), "model", fs, rec.sample_rate)
+    tolerance = _told_tolerance(rec, rpm, rpm_tolerance)
+    if tolerance is None:
+        tolerance = next(p.default for p in PARAMETERS if p.name == "rpm_tolerance")
+    if not takes_reference(cfg):
+        raise InputError(f"baseline {rec.path}: {NO_REFERENCE}")
+    x, _ = _at_rate(rec, fs, chosen.name)
+    try:
+        return learn_reference(x, fs, bearing, rpm or rec.rpm, tolerance, cfg.front_end, cfg.usable_bandwidth,
+                               rec.path or "healthy recording")
+    except MachineReferenceError as exc:
+        raise InputError(f"baseline {rec.path}: {exc}") from None
+
+
 def run_pipeline(pipeline: MonitorPipeline, x: np.ndarray, fs: float, source: str,
                  chunk_s: float = CHUNK_S) -> list[Decision]:
     """Feed ``x`` (m/s² at ``fs`` Hz) to ``pipeline`` in chunks of ``chunk_s`` seconds; every window's decision."""
@@ -100,7 +138,8 @@ def run_pipeline(pipeline: MonitorPipeline, x: np.ndarray, fs: float, source: st
 def diagnose_recording(rec: Recording, model_set: str | None = None, method: str = "model",
                        rpm: float | None = None, bearing: Bearing | None = None,
                        config: DiagnoserConfig | None = None, keep_streams: bool = False,
-                       chunk_s: float = CHUNK_S, rpm_tolerance: float | None = None) -> OfflineResult:
+                       chunk_s: float = CHUNK_S, rpm_tolerance: float | None = None,
+                       baseline: Recording | MachineReference | None = None) -> OfflineResult:
     """Diagnose a whole recording offline, exactly as the live graph would.
 
     Parameters
@@ -122,6 +161,10 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         Decision parameters (default: the model set's).
     keep_streams : bool
         Keep full residual / estimate / train arrays for figures.
+    baseline : Recording or MachineReference, optional
+        The machine's own healthy reference: a healthy recording of the same machine (learnt by
+        :func:`learn_recording_reference` with the same arguments) or a reference learnt before;
+        None: the blind decision. The textbook method takes none.
 
     Raises InputError (one line) only when the recording cannot be analysed at all, whatever its
     signal holds: an unknown method or model set, a sample rate too low for the bearing's fault
@@ -138,14 +181,20 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     fs = chosen.sample_rate or rec.sample_rate
     cfg = _decision_config(config or config_for(ms), method, fs, rec.sample_rate)
     speed = _speed(rec, rpm)
+    if isinstance(baseline, Recording):
+        baseline = learn_recording_reference(baseline, model_set, rpm, bearing, rpm_tolerance, config)
+    if baseline is not None and method == "envelope":
+        LOG.warning("the textbook method judges blind: the machine reference is not used")
+        baseline = None
     try:
+        cfg = with_reference(cfg, baseline)
         cfg.front_end.check_recording(min(fs, rec.sample_rate), bearing, speed, rec.duration, cfg.usable_bandwidth)
     except ValueError as exc:
         raise InputError(str(exc)) from None
+    LOG.info("machine reference: %s", baseline.describe() if baseline is not None else "none (the blind decision)")
     x, truth = _at_rate(rec, fs, ms)
     observed = method == "model"
-    if rpm_tolerance is None and (rpm is None or rpm == rec.rpm):
-        rpm_tolerance = rec.rpm_tolerance
+    rpm_tolerance = _told_tolerance(rec, rpm, rpm_tolerance)
     pipeline = MonitorPipeline(bearing, ms, cfg, speed, observed,
                                STREAMS if observed or cfg.front_end.EVERY_STREAM else STREAMS[:1], keep_streams,
                                rpm_tolerance)
@@ -155,7 +204,7 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     problems = [(d.window_start, d.window_end, d.not_diagnosed) for d in decisions if not d.diagnosed]
     segs = segments_from_decisions(decisions, x.size / fs, ms)
     return OfflineResult(segs, decisions, ms, fs, speed, x, truth, pipeline.kept_streams(), cpu, method, problems,
-                         bearing)
+                         bearing, baseline.describe() if baseline is not None else "")
 
 
 def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",

@@ -40,6 +40,7 @@ Only distinct evidence counts, judged on the accumulated spectrum exactly as on 
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -56,7 +57,9 @@ from .significance import averaged_median
 class CombGeometry:
     """What the combs are tested at: shaft rate ``fr`` (Hz) and its uncertainty ``sigma`` (Hz), the window
     (samples) at sample rate ``fs`` (Hz), the slip range ``rho``, the ``terms`` per hypothesis
-    (:func:`.fault_combs.comb_terms`), the highest tested envelope frequency ``f_top`` (Hz)."""
+    (:func:`.fault_combs.comb_terms`), the highest tested envelope frequency ``f_top`` (Hz), the machine's
+    own envelope lines: ``known(spectrum, df, k)`` gives those (Hz) that have not grown in a spectrum of k
+    windows (:mod:`.machine_reference`: no comb term on them counts)."""
 
     fs: float
     fr: float
@@ -65,6 +68,7 @@ class CombGeometry:
     rho: tuple[float, float]
     terms: dict = field(compare=False)
     f_top: float = 0.0
+    known: Callable = field(default=lambda spectrum, df, k: np.empty(0), compare=False)
 
     def same_bins(self, other: CombGeometry) -> bool:
         """Whether ``other``'s combs fall in the same bins: window unchanged, shaft rate within half a bin
@@ -136,7 +140,8 @@ class Accumulation:
         found = explain_away(found, g.terms, g.fr, lambda h, held: self._best(z, rows, h, n_bands, held))
         return {h: e.evidence if e.evidence.log10p == 0.0 or distinct(
             e.row, self.df, g.fr, h, g.terms[h], g.rho, e.evidence.rho, e.evidence.log10p - np.log10(n_bands),
-            self.mask_shaft, self.windows, self.series) else replace(e.evidence, log10p=0.0)
+            self.mask_shaft, self.windows, self.series, g.known(e.row[None, :], self.df, self.windows))
+            else replace(e.evidence, log10p=0.0)
             for h, e in found.items()}
 
     def _rows(self) -> list:
@@ -166,7 +171,7 @@ class Accumulation:
         best = None
         for spectra, index in rows:
             lp, rho, s, j = comb_evidence(spectra, self.df, g.fr, {h: g.terms[h]}, g.rho, self.mask_shaft, n_bands,
-                                          self.windows, exclude)[h]
+                                          self.windows, np.r_[exclude, g.known(spectra, self.df, self.windows)])[h]
             r = int(np.argmin(lp))
             if best is None or lp[r] < best.log10p:
                 i, row = index[r]

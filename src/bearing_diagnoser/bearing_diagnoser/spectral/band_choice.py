@@ -87,12 +87,13 @@ def live_bands(raw: np.ndarray, n: int, fs: float, f_top: float, f_usable: float
 
 def choose_band(x: np.ndarray, fs: float, f_top: float, f_usable: float, fr: float, terms: dict,
                 rho: tuple[float, float], prewhiten: bool = True, mask_shaft: bool = True,
-                criterion: str = "evidence") -> BandChoice | None:
+                criterion: str = "evidence", exclude=()) -> BandChoice | None:
     """The candidate band of buffer ``x`` (fs Hz) with the strongest fault evidence; None if none fits.
 
     ``f_top`` and ``fr`` in Hz, ``terms`` and ``rho`` as in :func:`.fault_combs.comb_evidence`.
     ``criterion="kurtogram"``: the most impulsive band instead (Antoni's kurtogram, the
-    textbook choice; the window tests then pay no factor for it).
+    textbook choice; the window tests then pay no factor for it). ``exclude``: frequencies (Hz) another
+    explanation holds (the machine's own lines), as in :func:`.fault_combs.comb_evidence`.
     """
     raw = np.fft.rfft(x - x.mean())
     groups = live_bands(raw, x.size, fs, f_top, f_usable)
@@ -107,7 +108,8 @@ def choose_band(x: np.ndarray, fs: float, f_top: float, f_usable: float, fr: flo
     ses = [band_ses(spectrum, x.size, fs, g, f_top)[0] for g in groups]
     score = []
     for _, run in groupby(ses, key=lambda s: s.shape[1]):  # all bands of one SES length in one pass
-        evidence = comb_evidence(normalise(np.concatenate(list(run))), fs / x.size, fr, terms, rho, mask_shaft)
+        evidence = comb_evidence(normalise(np.concatenate(list(run))), fs / x.size, fr, terms, rho, mask_shaft,
+                                 exclude=exclude)
         score.append(np.min([e[0] for e in evidence.values()], axis=0))
     score = np.concatenate(score)
     i = int(np.argmin(score))

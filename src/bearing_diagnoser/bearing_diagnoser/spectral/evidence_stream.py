@@ -32,6 +32,10 @@ lines keeps the last measurement. Terms two hypotheses could both match at one s
 (:func:`.fault_combs.drop_ambiguous`); a line one hypothesis explains is taken from the
 others before they are tested (explain-away), in the window as in the long horizon.
 
+With the machine's own healthy reference (``settings.reference``, :mod:`.machine_reference`) the
+told speed is corrected by its learnt ratio, and its envelope lines are held by another
+explanation in every comb test (window, band choice, long horizon): no comb term on them counts.
+
 Only past data enter a decision (causal). A gap in the samples restarts the schedule.
 
 Snapshots (a snapshot sensor's chunks, :mod:`bearing_common.chunk_stream`): the pause before
@@ -47,6 +51,7 @@ horizon at that geometry (a sensor's snapshots are all equally long).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from scipy.fft import next_fast_len
@@ -151,6 +156,9 @@ class EvidenceStream:
         if hz is None:
             self._told = None
             return
+        if self.settings.reference is not None:  # the learnt speed relationship (:mod:`.machine_reference`)
+            hz, tolerance = self.settings.reference.correct_speed(hz, tolerance or self.settings.told_tolerance,
+                                                                  self.settings.told_tolerance)
         tol = self.settings.told_tolerance if tolerance is None or not self.settings.refine_speed else tolerance
         self._told = (float(hz), float(tol))
         measured = self.speed is not None and self.speed[2] in ("refined", "measured")
@@ -226,8 +234,9 @@ class EvidenceStream:
         self._set_geometry(fr, sigma)
         usable = self.usable_bandwidth or 0.45 * self.fs
         self.band = choose_band(x, self.fs, self.f_top, usable, fr, self.terms, self.rho, s.prewhiten, s.mask_shaft,
-                                s.band_criterion)
-        geometry = CombGeometry(self.fs, fr, sigma, self.window, self.rho, self.terms, self.f_top)
+                                s.band_criterion, s.known_lines(fr))
+        geometry = CombGeometry(self.fs, fr, sigma, self.window, self.rho, self.terms, self.f_top,
+                                partial(s.known_lines, fr, None))
         if self.long is not None and self.long.geometry is not None and self.long.geometry.same_bins(geometry):
             self.long.retune(geometry)
         elif self.long is not None:
@@ -344,20 +353,21 @@ class EvidenceStream:
         s = self.settings
         ses, df = band_ses(spectrum, n, self.fs, np.array([[band.low, band.high]]), f_top)
         z = normalise(ses)
-        found = comb_evidence(z, df, fr, terms, self.rho, s.mask_shaft, band.candidates)
+        known = s.known_lines(fr, (band.low, band.high), z, df)  # the machine's own lines (:mod:`.machine_reference`)
+        found = comb_evidence(z, df, fr, terms, self.rho, s.mask_shaft, band.candidates, exclude=known)
         evidence = {h: CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
                     for h, (lp, rho, stat, j) in found.items()}
 
         def retest(h: FaultState, held: np.ndarray) -> CombEvidence:
             lp, rho, stat, j = comb_evidence(z, df, fr, {h: terms[h]}, self.rho, s.mask_shaft, band.candidates,
-                                             exclude=held)[h]
+                                             exclude=np.r_[held, known])[h]
             return CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
 
         evidence = explain_away(evidence, terms, fr, retest)
         for h, e in evidence.items():  # distinct evidence only (:mod:`.distinct_evidence`)
             if e.log10p < 0.0 and not distinct(z[0], df, fr, h, terms[h], self.rho, e.rho,
                                                e.log10p - np.log10(band.candidates), s.mask_shaft,
-                                               series=not s.fundamental_only):
+                                               series=not s.fundamental_only, exclude=known):
                 evidence[h] = CombEvidence(0.0, e.rho, e.statistic, e.terms)
         # the live view's hook (:mod:`.envelope_view`): this window's spectrum as tested, no copy
         self.envelope = EnvelopeView(end, n, self.fs, z[0], df, (band.low, band.high), f_top, fr, self.speed[2],
@@ -381,14 +391,14 @@ class EvidenceStream:
         f_top = highest_term(terms, self.rho[1]) * fr
         usable = self.usable_bandwidth or 0.45 * self.fs
         band = choose_band(x, self.fs, f_top, usable, fr, terms, self.rho, s.prewhiten, s.mask_shaft,
-                           s.band_criterion)
+                           s.band_criterion, s.known_lines(fr))
         if band is None:
             return None
         spectrum = window_spectrum(x, s.prewhiten)
         evidence = self._evidence(spectrum, x.size, band, terms, f_top, fr, end)
         if self.long is None:
             return WindowEvidence(start, end, evidence, band, fr, sigma, source, sensor, told, untested=untested)
-        geometry = CombGeometry(self.fs, fr, sigma, x.size, self.rho, terms, f_top)
+        geometry = CombGeometry(self.fs, fr, sigma, x.size, self.rho, terms, f_top, partial(s.known_lines, fr, None))
         held = self.long.geometry
         if held is not None and held.same_bins(geometry) and held.terms.keys() == terms.keys():
             self.long.retune(geometry)

@@ -6,12 +6,16 @@ Every field switches one block of :mod:`.front_end` (the ablations of ``make acc
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bearing_common.bearings import Bearing
 
 from .fault_combs import comb_terms, highest_term, rho_range
+
+if TYPE_CHECKING:
+    from .machine_reference import MachineReference
 
 
 @dataclass(frozen=True)
@@ -47,6 +51,9 @@ class SpectralSettings:
         False alarms per hour of healthy operation (Gaussian noise) that the tests may give
         together, every window's short-horizon test and every long-horizon evaluation counted
         (a union bound: :mod:`.front_end`).
+    reference : MachineReference or None
+        The machine's own healthy reference (:mod:`.machine_reference`): the told speed corrected by
+        its ratio, its envelope lines held by another explanation in every comb test; None: blind.
     """
 
     prewhiten: bool = True
@@ -65,6 +72,7 @@ class SpectralSettings:
     max_windows: int = 32
     speed_lines: int = 3
     false_alarm_rate: float = 1e-3
+    reference: MachineReference | None = None
 
     NAME = "spectral"
     NEEDS_SPEED = True  # estimated blind, the speed misses most faults (bearing-accuracy ablation)
@@ -86,8 +94,17 @@ class SpectralSettings:
     def describe_false_alarms(self, pfa: float) -> str:
         return f"false alarms at most {self.false_alarm_rate:g} per hour of healthy operation"
 
+    def with_reference(self, reference: MachineReference | None) -> SpectralSettings:
+        return replace(self, reference=reference)
+
+    def known_lines(self, fr: float, band: tuple[float, float] | None = None, spectrum: np.ndarray | None = None,
+                    df: float = 0.0, k: int = 1) -> np.ndarray:
+        """The reference's envelope lines (Hz) at shaft rate ``fr`` (Hz) in ``band`` that have not grown in
+        ``spectrum`` (:meth:`.machine_reference.MachineReference.known_lines`); none without a reference."""
+        return np.empty(0) if self.reference is None else self.reference.known_lines(fr, band, spectrum, df, k)
+
     def textbook(self) -> SpectralSettings:
-        """:data:`BASELINE` with this decision's speed handling (tolerance, blind range)."""
+        """:data:`BASELINE` with this decision's speed handling (tolerance, blind range); blind (no reference)."""
         return replace(BASELINE, told_tolerance=self.told_tolerance, blind_range_hz=self.blind_range_hz)
 
     def check_recording(self, sample_rate: float, bearing: Bearing, rpm: float | None, duration: float,
