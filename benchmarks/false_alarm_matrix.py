@@ -186,7 +186,8 @@ class Cell:
 @dataclass
 class Outcome:
     """A cell's fault calls (state labels of its diagnosed segments other than NORMAL), windows, windows
-    not diagnosed (by kind), error (bad input: exit 2; ``""``), what its variant changed, CPU time (s)."""
+    not diagnosed (by kind), error (bad input: exit 2; ``""``), why its variant could not be built
+    (``""``: it was), what its variant changed, CPU time (s)."""
 
     cell: Cell
     rig: str
@@ -194,6 +195,7 @@ class Outcome:
     windows: int = 0
     not_diagnosed: Counter = field(default_factory=Counter)
     error: str = ""
+    unbuilt: str = ""
     change: str = ""
     cpu_s: float = 0.0
 
@@ -209,8 +211,13 @@ def run_cell(cell: Cell) -> Outcome:
     out = Outcome(cell, m.rig)
     try:
         pieces, out.change = variant(cell.source, cell.variant, cell.geometry)
+    except ValueError as exc:  # no place for a foreign line
+        out.unbuilt = str(exc)
+        out.cpu_s = time.process_time() - cpu
+        return out
+    try:
         segments, decisions = MODES[cell.mode](m, pieces, SPEEDS[cell.speed] * m.rpm, GEOMETRIES[cell.geometry])
-    except (InputError, BearingError, ValueError) as exc:
+    except (InputError, BearingError) as exc:
         out.error = str(exc)
     else:
         out.calls = tuple(dict.fromkeys(s.state.label for s in segments
@@ -253,9 +260,12 @@ def run(todo: list[Cell], jobs: int = 1, progress: Callable[[int, int], None] | 
 
 
 def _summary(outcomes: list[Outcome]) -> str:
-    """"alarms/cells (parts named), not diagnosed %, exit 2" of a group of cells."""
+    """"alarms/cells (parts named), not diagnosed %, exit 2, not built" of a group of cells (the cells whose
+    variant could not be built are counted apart, not among the cells)."""
+    unbuilt = sum(bool(o.unbuilt) for o in outcomes)
+    outcomes = [o for o in outcomes if not o.unbuilt]
     if not outcomes:
-        return "-"
+        return f"not built: {unbuilt}" if unbuilt else "-"
     alarms = [o for o in outcomes if o.alarm]
     parts = Counter(c for o in alarms for c in o.calls)
     named = f" ({', '.join(f'{k} {n}' for k, n in sorted(parts.items()))})" if parts else ""
@@ -263,7 +273,8 @@ def _summary(outcomes: list[Outcome]) -> str:
     nd = sum(sum(o.not_diagnosed.values()) for o in outcomes)
     share = f"{100 * nd / windows:.0f} %" if windows else "-"
     refused = sum(bool(o.error) for o in outcomes)
-    return f"{len(alarms)}/{len(outcomes)}{named}, {share}" + (f", exit 2: {refused}" if refused else "")
+    return (f"{len(alarms)}/{len(outcomes)}{named}, {share}" + (f", exit 2: {refused}" if refused else "")
+            + (f", not built: {unbuilt}" if unbuilt else ""))
 
 
 def table(outcomes: list[Outcome], key: Callable[[Outcome], str], title: str) -> list[str]:
@@ -291,20 +302,21 @@ def detail(outcomes: list[Outcome]) -> list[str]:
     for (rig, geometry), group in groups.items():
         cells_ = []
         for v, m in cols:
-            g = [o for o in group if o.cell.variant == v and o.cell.mode == m]
+            g = [o for o in group if o.cell.variant == v and o.cell.mode == m and not o.unbuilt]
             cells_.append(f"{sum(o.alarm for o in g)}/{len(g)}")
         rows.append(f"| {rig} | {geometry} | " + " | ".join(cells_) + " |")
     return rows
 
 
 def alarm_list(outcomes: list[Outcome]) -> list[str]:
-    """Every alarm and refusal, one row each."""
+    """Every alarm, refusal and cell not built, one row each."""
     rows = ["| source | geometry | speed | variant | mode | called | variant's change |", "|---" * 7 + "|"]
     for o in outcomes:
-        if o.alarm or o.error:
+        if o.alarm or o.error or o.unbuilt:
             c = o.cell
             rows.append(f"| {c.source} | {c.geometry} | {c.speed} | {c.variant} | {c.mode} | "
-                        f"{', '.join(o.calls) or 'exit 2: ' + o.error} | {o.change} |")
+                        f"{', '.join(o.calls) or ('exit 2: ' + o.error if o.error else 'not built')} | "
+                        f"{o.change or o.unbuilt} |")
     return rows
 
 
@@ -315,7 +327,8 @@ def markdown(outcomes: list[Outcome], wall_s: float, quick: bool) -> str:
     lines = ["# False alarms on healthy machines: the matrix", "",
              (__doc__ or "").split("\n\n", 1)[1].split("\n\n    .venv")[0], "",
              "Each cell of the tables: alarms / cells (the states called, counted once per cell), the share of "
-             "windows not diagnosed, and the cells refused as bad input (exit 2)." + (" **Quick subset.**" if quick
+             "windows not diagnosed, the cells refused as bad input (exit 2), and those whose variant could not be "
+             "built (no place for a foreign line: not counted among the cells)." + (" **Quick subset.**" if quick
                                                                                        else ""), "",
              "## Totals", ""]
     lines += table(outcomes, lambda o: o.cell.variant, "variant") + total

@@ -139,15 +139,18 @@ def foreign_frequencies(bearing: Bearing, fr: float):
 def place_foreign_line(pieces: list[np.ndarray], fs: float, bearing: Bearing, fr: float,
                        t0s: list[float] | None = None) -> ForeignLine:
     """The first of :func:`foreign_frequencies` where the recording (``pieces``, their clocks ``t0s``)
-    has no line of its own (height below :data:`LINE_STRENGTH_RANGE`'s lower end), with the depth that
+    has no line of its own (height below :data:`LINE_STRENGTH_RANGE`'s lower end, in the pieces' own
+    windows: scaled up from snapshots shorter than 0.5 s, the most a floor of few windows and many
+    bands reaches would pass for a line), with the depth that
     makes it :data:`LINE_STRENGTH` × the floor (:func:`modulation_depth`); ValueError when there is none."""
     f_top = envelope_top(bearing, fr)
     for line in foreign_frequencies(bearing, fr):
-        if line_strength(pieces, fs, line.hz, f_top) >= LINE_STRENGTH_RANGE[0]:
+        if line_strength(pieces, fs, line.hz, f_top, scaled=False) >= LINE_STRENGTH_RANGE[0]:
             continue
         depth, strength = modulation_depth(pieces, fs, line.hz, f_top, t0s=t0s)
         return replace(line, depth=depth, strength=strength)
-    raise ValueError(f"no place for a foreign line in the slip ranges of {bearing.name}")
+    raise ValueError(f"no place for a foreign line in the slip ranges of {bearing.name} where the recording has no "
+                     "line of its own")
 
 
 def modulated(x: np.ndarray, fs: float, hz: float, depth: float, t0: float = 0.0) -> np.ndarray:
@@ -157,11 +160,12 @@ def modulated(x: np.ndarray, fs: float, hz: float, depth: float, t0: float = 0.0
     return x * (1.0 + depth * np.cos(2 * np.pi * hz * t))
 
 
-def line_heights(pieces: list[np.ndarray], fs: float, hz: float, f_top: float) -> np.ndarray:
+def line_heights(pieces: list[np.ndarray], fs: float, hz: float, f_top: float, scaled: bool = True) -> np.ndarray:
     """Mean height over the floor of the envelope spectrum's bin nearest ``hz``, over windows of
-    :data:`STRENGTH_WINDOW_S` (or each piece whole when shorter, its excess over the floor scaled to
-    that window length: a stationary line's excess grows with the window), per view (prewhitened,
-    not) and candidate band of the decision's band choice above ``f_top`` Hz: shape (2, bands)."""
+    :data:`STRENGTH_WINDOW_S` (or each piece whole when shorter, its excess over the floor then scaled
+    to that window length when ``scaled``: a stationary line's excess grows with the window), per view
+    (prewhitened, not) and candidate band of the decision's band choice above ``f_top`` Hz: shape
+    (2, bands)."""
     bands = candidate_bands(fs, f_top, 0.45 * fs)
     out = []
     for prewhiten in (True, False):
@@ -169,7 +173,7 @@ def line_heights(pieces: list[np.ndarray], fs: float, hz: float, f_top: float) -
         scale = 1.0
         for x in pieces:
             n = min(x.size, int(round(STRENGTH_WINDOW_S * fs)))
-            scale = STRENGTH_WINDOW_S * fs / n
+            scale = STRENGTH_WINDOW_S * fs / n if scaled else 1.0
             for i in range(0, x.size - n + 1, n):
                 X = window_spectrum(x[i:i + n], prewhiten)
                 row = []
@@ -181,9 +185,9 @@ def line_heights(pieces: list[np.ndarray], fs: float, hz: float, f_top: float) -
     return np.array(out)
 
 
-def line_strength(pieces: list[np.ndarray], fs: float, hz: float, f_top: float) -> float:
+def line_strength(pieces: list[np.ndarray], fs: float, hz: float, f_top: float, scaled: bool = True) -> float:
     """The line's height at ``hz`` over the floor where it stands highest (:func:`line_heights`)."""
-    return float(line_heights(pieces, fs, hz, f_top).max())
+    return float(line_heights(pieces, fs, hz, f_top, scaled).max())
 
 
 def modulation_depth(pieces: list[np.ndarray], fs: float, hz: float, f_top: float,

@@ -18,7 +18,7 @@ from bearing_common.states import FaultState
 from bearing_diagnoser.spectral.fault_combs import SHAFT_MASK_BINS, comb_terms
 from bearing_diagnoser.spectral.shaft_speed import estimate_speed
 from benchmarks import healthy_variants as hv
-from benchmarks.false_alarm_matrix import GEOMETRIES, Cell, machine, run_cell
+from benchmarks.false_alarm_matrix import GEOMETRIES, Cell, Outcome, machine, markdown, run_cell
 from benchmarks.healthy_data import CONTINUOUS
 
 EIGHT_BALLS = "8 balls d/D 0.25 (BPFO 3x, BPFI 5x)"
@@ -46,6 +46,9 @@ def recordings():
     ("HIT-SM Normal_1200", "6205", "own speed", "as recorded"),
     ("HIT-SM Normal_1200", "6205", "own speed", "foreign line"),
     pytest.param("HIT-SM Normal_1200", EIGHT_BALLS, "own speed", "as recorded", marks=MAIN_FAILS),
+    pytest.param("HIT-SM Normal_900", "femto", "own speed", "as recorded", marks=MAIN_FAILS),
+    pytest.param("HIT-SM Normal_600", "9 balls d/D 1/3 (BPFO 3x, BPFI 6x)", "told 7 % low", "as recorded",
+                 marks=MAIN_FAILS),
 ])
 def test_no_alarm_from_our_decision(source, geometry, speed, variant):
     out = run_cell(Cell(source, geometry, speed, variant, "ours"))
@@ -119,3 +122,12 @@ def test_the_floor_measures_one():
     assert heights.size > 20 and np.mean(heights) == pytest.approx(1.0, abs=0.1)
     depth, strength = hv.modulation_depth([x], fs, 175.0, 200.0)
     assert strength == pytest.approx(hv.LINE_STRENGTH, abs=hv.STRENGTH_TOLERANCE) and depth < 0.2
+
+
+def test_the_report_counts_refusals_and_cells_not_built_apart_from_alarms():
+    cell = Cell("S", "6205", "own speed", "foreign line", "ours")
+    outcomes = [Outcome(cell, "R", ("ball",), 10), Outcome(cell, "R", (), 10, error="too short"),
+                Outcome(cell, "R", unbuilt="no place for a foreign line")]
+    text = markdown(outcomes, 1.0, quick=True)
+    assert "| all | 1/2 (ball 1), 0 %, exit 2: 1, not built: 1 |" in text
+    assert "| S | 6205 | own speed | foreign line | ours | not built | no place for a foreign line |" in text
