@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import shutil
 import subprocess
 import sys
@@ -37,19 +36,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # `benchmarks` as a package
 from benchmarks.doc_tables import add_docs_option, write_block  # noqa: E402
+from benchmarks.healthy_data import CONTINUOUS, DATA, FEMTO_LIVES  # noqa: E402
 
-DATA = Path(os.environ.get("BEARING_DATA_DIR", ROOT.parent / "shared" / "data"))
-BEARINGS = ("Bearing1_1", "Bearing1_2", "Bearing2_1", "Bearing2_2", "Bearing3_1", "Bearing3_2")
+BEARINGS = tuple(FEMTO_LIVES)
 FIGURE = ROOT / "docs/figures/health/trend_Bearing1_1.png"
 
 #: Healthy recordings of the other rigs: (name, file, sample rate, channel).
-HEALTHY = (
-    ("CWRU 097 drive end", "cwru/097_normal_0hp_DE48k.mat", 48000.0, "X097_DE_time"),
-    ("CWRU 097 fan end", "cwru/097_normal_0hp_DE48k.mat", 48000.0, "X097_FE_time"),
-    ("HIT-SM Normal_600", "hit-sm/spectraquest/Normal_600.mat", 51200.0, None),
-    ("HIT-SM Normal_900", "hit-sm/spectraquest/Normal_900.mat", 51200.0, None),
-    ("HIT-SM Normal_1200", "hit-sm/spectraquest/Normal_1200.mat", 51200.0, None),
-)
+HEALTHY = tuple((h.label, h.file, h.sample_rate, h.channel) for h in CONTINUOUS)
 
 SNAPSHOT = 0.1  # s
 INTERVAL = 60.0  # s
