@@ -13,7 +13,9 @@ six FEMTO lives as its snapshots) is diagnosed
   envelope (:data:`VARIANTS`, :mod:`benchmarks.healthy_variants`);
 * by each mode of :data:`MODES`: ours (what ``bearing-diagnose FILE --bearing B --rpm NOMINAL
   --sample-rate FS`` runs: the model set chosen from the input, the observers where it has a
-  model) and the textbook baseline (``--method envelope``). The FEMTO snapshots (0.1 s each, one
+  model); ours with the machine's own reference (the first half of a recording learnt as
+  ``--baseline`` learns it, the second half monitored; not for snapshots, which are not learnt
+  from); and the textbook baseline (``--method envelope``). The FEMTO snapshots (0.1 s each, one
   a minute) go through the diagnoser session as the node runs a snapshot sensor (input mode
   ``snapshot``, model set ``none``, as ``bearing-trend`` feeds them), since ``bearing-diagnose``
   refuses a file shorter than one analysis window.
@@ -167,9 +169,32 @@ def decide(m: Machine, pieces: tuple, told_rpm: float, bearing: Bearing, method:
     return segments_from_decisions(decisions, m.clocks[-1] - m.clocks[0] + pieces[-1].size / m.fs, "none"), decisions
 
 
+#: Share of a recording, from its start, learnt as the machine's reference in the with-reference mode: as
+#: long a commissioning as the stretch then monitored (the reference's level scatter and the monitored
+#: evidence are then known about equally well).
+REFERENCE_SHARE = 0.5
+
+
+class NotApplicable(ValueError):
+    """A mode that cannot run on a source (the cell is counted apart, as a variant not built)."""
+
+
+def decide_with_reference(m: Machine, pieces: tuple, told_rpm: float,
+                          bearing: Bearing) -> tuple[list[Segment], list[Decision]]:
+    """Ours with the machine's own reference: the first :data:`REFERENCE_SHARE` of the recording (in the
+    same variant, told the same speed) learnt as ``bearing-diagnose REST --baseline FIRST`` learns it, the
+    rest monitored. Snapshots are not learnt from (a period of pauses is no stretch of signal)."""
+    if m.file is None:
+        raise NotApplicable("snapshots: no reference is learnt from them")
+    x = pieces[0]
+    cut = int(REFERENCE_SHARE * x.size)
+    return decide(m, (x[cut:],), told_rpm, bearing, method="model", baseline=m.recording(told_rpm, x[:cut]))
+
+
 #: The modes compared: name -> run(machine, pieces, told rpm, bearing) -> (segments, decisions).
 MODES: dict[str, Callable] = {
     "ours": partial(decide, method="model"),
+    "ours, with reference": decide_with_reference,
     "baseline": partial(decide, method="envelope"),
 }
 
@@ -217,6 +242,8 @@ def run_cell(cell: Cell) -> Outcome:
         return out
     try:
         segments, decisions = MODES[cell.mode](m, pieces, SPEEDS[cell.speed] * m.rpm, GEOMETRIES[cell.geometry])
+    except NotApplicable as exc:
+        out.unbuilt = str(exc)
     except (InputError, BearingError) as exc:
         out.error = str(exc)
     else:
@@ -328,7 +355,7 @@ def markdown(outcomes: list[Outcome], wall_s: float, quick: bool) -> str:
              (__doc__ or "").split("\n\n", 1)[1].split("\n\n    .venv")[0], "",
              "Each cell of the tables: alarms / cells (the states called, counted once per cell), the share of "
              "windows not diagnosed, the cells refused as bad input (exit 2), and those whose variant could not be "
-             "built (no place for a foreign line: not counted among the cells)." + (" **Quick subset.**" if quick
+             "built (no place for a foreign line, or a mode that does not run on the source: not counted among the cells)." + (" **Quick subset.**" if quick
                                                                                        else ""), "",
              "## Totals", ""]
     lines += table(outcomes, lambda o: o.cell.variant, "variant") + total

@@ -19,7 +19,7 @@ from bearing_diagnoser.spectral.fault_combs import SHAFT_MASK_BINS, comb_terms
 from bearing_diagnoser.spectral.shaft_speed import estimate_speed
 from benchmarks import healthy_variants as hv
 from benchmarks.false_alarm_matrix import GEOMETRIES, Cell, Outcome, machine, markdown, run_cell
-from benchmarks.healthy_data import CONTINUOUS
+from benchmarks.healthy_data import CONTINUOUS, DATA
 
 EIGHT_BALLS = "8 balls d/D 0.25 (BPFO 3x, BPFI 5x)"
 CWRU_DE = "CWRU 097 drive end"
@@ -50,6 +50,27 @@ def test_no_alarm_from_our_decision(source, geometry, speed, variant):
     assert out.windows > 0
     assert out.calls == (), (out.calls, out.change)
     assert sum(out.not_diagnosed.values()) < 0.5 * out.windows, out.not_diagnosed  # a verdict, not silence
+
+
+@pytest.mark.parametrize("source, geometry, variant", [
+    (CWRU_DE, EIGHT_BALLS, "as recorded"),
+    (CWRU_DE, EIGHT_BALLS, "foreign line"),  # the line is in the reference too: the machine's own
+    ("HIT-SM Normal_1200", EIGHT_BALLS, "as recorded"),
+    ("HIT-SM Normal_600", "6205", "1x family notched"),
+])
+def test_no_alarm_with_the_machines_own_reference(source, geometry, variant):
+    out = run_cell(Cell(source, geometry, "own speed", variant, "ours, with reference"))
+    assert not out.error and not out.unbuilt
+    assert out.windows > 0
+    assert out.calls == (), (out.calls, out.change)
+    assert sum(out.not_diagnosed.values()) < 0.5 * out.windows, out.not_diagnosed
+
+
+def test_snapshots_take_no_reference():
+    if not (DATA / "femto" / "Bearing1_1").is_dir():
+        pytest.skip(f"FEMTO Bearing1_1 not found under {data_dir()}")
+    out = run_cell(Cell("FEMTO Bearing1_1", "6205", "own speed", "as recorded", "ours, with reference"))
+    assert out.unbuilt and out.windows == 0 and not out.calls
 
 
 def _speeds(x, fs, nominal_hz):
