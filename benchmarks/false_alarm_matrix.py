@@ -355,8 +355,8 @@ def markdown(outcomes: list[Outcome], wall_s: float, quick: bool) -> str:
              (__doc__ or "").split("\n\n", 1)[1].split("\n\n    .venv")[0], "",
              "Each cell of the tables: alarms / cells (the states called, counted once per cell), the share of "
              "windows not diagnosed, the cells refused as bad input (exit 2), and those whose variant could not be "
-             "built (no place for a foreign line, or a mode that does not run on the source: not counted among the cells)." + (" **Quick subset.**" if quick
-                                                                                       else ""), "",
+             "built (no place for a foreign line, or a mode that does not run on the source: not counted among "
+             "the cells)." + (" **Quick subset.**" if quick else ""), "",
              "## Totals", ""]
     lines += table(outcomes, lambda o: o.cell.variant, "variant") + total
     lines += ["", "## Per rig", ""] + table(outcomes, lambda o: o.rig, "rig")
