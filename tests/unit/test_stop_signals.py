@@ -141,3 +141,35 @@ def test_a_stop_raised_inside_a_finalizer_prints_nothing_and_stays_pending(monke
         assert stop.signal == signal.SIGINT
         Collected(ValueError("other"))
     assert reported == [ValueError]
+
+
+HALF_DONE = """
+import os, signal, time
+from bearing_common.node_main import process_stop_signals
+
+class Collected:  # an LLVM object of numba's, collected during a first compile
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.2)  # the handler runs here: its StopRequested is swallowed
+
+with process_stop_signals("probe") as stop:
+    with stop.aborting():
+        Collected()
+        raise RuntimeError("no compiled object yet")  # the compile, interrupted, fails on its own
+print("not stopped")
+"""
+
+
+def test_a_start_up_that_fails_after_its_stop_was_swallowed_ends_as_a_stop():
+    """The stop came inside a finalizer (swallowed there), and the start-up, cut in the middle, then
+    raised an error of its own (numba's cache save: "no compiled object yet"): a stop, exit 0 and one
+    line, not a traceback. An error with no stop before it stays an error (next test)."""
+    run = subprocess.run([sys.executable, "-c", HALF_DONE], capture_output=True, text=True, timeout=30)
+    assert run.returncode == 0 and run.stderr == "probe: SIGINT while starting: stopped\n", run.stderr
+    assert not run.stdout
+
+
+def test_a_start_up_error_without_a_stop_is_an_error():
+    run = subprocess.run([sys.executable, "-c", HALF_DONE.replace("        Collected()\n", "")],
+                         capture_output=True, text=True, timeout=30)
+    assert run.returncode == 1 and "RuntimeError: no compiled object yet" in run.stderr

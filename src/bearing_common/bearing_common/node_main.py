@@ -121,8 +121,8 @@ _process_stop: StopSignals | None = None  #: the process's, once a start entered
 @contextlib.contextmanager
 def process_stop_signals(program: str):
     """The process's :class:`StopSignals` (with the stall watchdog), entered on first use with the
-    start-up abortable; a stop while starting (StopRequested) ends the process with one line and
-    exit code 0."""
+    start-up abortable; a stop while starting (StopRequested, or any error the interrupted start-up
+    raises after it) ends the process with one line and exit code 0."""
     global _process_stop
     if _process_stop is not None:
         yield _process_stop
@@ -135,6 +135,10 @@ def process_stop_signals(program: str):
             yield stop
     except StopRequested:
         stopped_while_starting(program, stop.signal)
+    except Exception:
+        if stop.aborted:  # the interrupted start-up's own failure (a StopRequested swallowed in a finalizer
+            stopped_while_starting(program, stop.signal)  # left numba's compile half done): still a stop
+        raise
     finally:
         _process_stop = None
 

@@ -26,7 +26,9 @@ a large kernel, an extension module's import) can hold it off for seconds under 
 ``stuck_start``, the watcher thread then ends the start-up itself: if the main thread is still
 in the abortable section ``START_GRACE_S`` after the signal, it calls ``stuck_start(signum)``,
 which must end the process (nothing of a start-up needs cleaning up but rclpy's context, which
-the process's end takes with it).
+the process's end takes with it). A StopRequested raised inside a finalizer is swallowed there;
+the start-up, cut in the middle, may then fail on its own (numba's cache save after an interrupted
+compile): :attr:`StopSignals.aborted` tells the caller that this failure is the stop's doing.
 """
 
 from __future__ import annotations
@@ -53,6 +55,7 @@ class StopSignals:
     def __init__(self, stall_s: float | None = None, stuck_start: Callable[[int], None] | None = None):
         self.signal: int | None = None
         self.abort = False  #: the first signal raises StopRequested (see the module's docstring)
+        self.aborted = False  #: the first signal came while ``abort`` was set (a start-up was interrupted)
         self._old = {}
         self._stall_s = stall_s
         self._stuck_start = stuck_start
@@ -110,6 +113,7 @@ class StopSignals:
         if self.signal is None:
             self.signal = signum
             if self.abort:
+                self.aborted = True
                 raise StopRequested(signum)
 
     def __exit__(self, *exc) -> None:
