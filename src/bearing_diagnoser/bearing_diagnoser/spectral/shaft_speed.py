@@ -14,10 +14,15 @@ quantisation) as its standard uncertainty σ. An estimate rests on at least ``mi
 lines, the 1× included, and on lines at half of the harmonics the buffer holds (by default).
 
 :func:`confirm_speed` confirms a told speed where that strict series is absent (a machine
-whose raw spectrum shows a weak 1x family): any two harmonics of the shaft rate, in the raw
-spectrum or in the squared envelope of the demodulation band (the shaft's own modulation of
-the machine's noise), inside the told tolerance. Two lines at exactly 1:2 inside a ±10 % range
-do not fall there by chance: each is a line at the 1 % level over the whole spectrum.
+whose raw spectrum shows a weak 1x family): two of the shaft rate's first three harmonics
+(:data:`CONFIRM_HARMONICS`), in the raw spectrum or in the squared envelope of the demodulation
+band (the shaft's own modulation of the machine's noise), inside the told tolerance. Two lines
+at exactly 1:2 inside a ±10 % range do not fall there by chance: each is a line at the 1 % level
+over the whole spectrum. Higher orders confirm nothing: the k-th harmonic is searched within
+3·k·σ of k times a rate that one line fixes, a range that at k = 10 spans some 15 bins, where
+another family's line (a belt's, a second shaft's) is found as often as not (HIT-SM at
+1200 rpm: a line of a 10.55 Hz family and one near its 10th harmonic "confirmed" 21.05 Hz for a shaft
+at 20.19 Hz, and a healthy machine told 7 % fast was called INNER_RACE).
 
 Use it to refine a speed that is told (a tachometer, the file, a nameplate) inside its
 tolerance. Without any prior it is not reliable: measured on the development recordings,
@@ -40,6 +45,9 @@ N_HARMONICS = 10
 #: Lines of the searched range tried as the 1× line, strongest first.
 N_CANDIDATES = 5
 
+#: Harmonics that confirm a told speed (:func:`confirm_speed`): the shaft's own low orders.
+CONFIRM_HARMONICS = 3
+
 #: Chance that noise alone puts one line anywhere in the spectrum.
 LINE_FALSE_ALARM = 0.01
 
@@ -54,13 +62,14 @@ class SpeedEstimate:
 
 
 def estimate_speed(x: np.ndarray, fs: float, f_lo: float, f_hi: float, min_lines: int = 3,
-                   min_share: float = 0.5) -> SpeedEstimate | None:
+                   min_share: float = 0.5, harmonics: int = N_HARMONICS) -> SpeedEstimate | None:
     """Shaft rate in [f_lo, f_hi] Hz from buffer ``x`` (fs Hz); None when no harmonic series of at least
-    ``min_lines`` lines, and lines at ``min_share`` of the harmonics the spectrum holds, is found."""
+    ``min_lines`` lines, and lines at ``min_share`` of the harmonics the spectrum holds, is found among
+    its first ``harmonics`` harmonics."""
     n = x.size
     power = np.abs(np.fft.rfft((x - x.mean()) * hanning(n))) ** 2
     df = fs / n
-    nb = min(power.size, int(min(0.45 * fs, (N_HARMONICS + 1) * f_hi) / df) + 1)
+    nb = min(power.size, int(min(0.45 * fs, (N_HARMONICS + 1) * f_hi) / df) + 1)  # (one spectrum for any harmonics)
     if nb < 8 or f_hi <= f_lo:
         return None
     z = normalise(power[:nb])[0]
@@ -78,20 +87,20 @@ def estimate_speed(x: np.ndarray, fs: float, f_lo: float, f_hi: float, min_lines
 
     strongest = i_lo + np.argsort(z[i_lo:i_hi])[::-1]
     for j in strongest[line[strongest]][:N_CANDIDATES]:  # the strongest line with a harmonic series
-        found = _harmonic_series(peak(int(j)), z, line, peak, df, nb, min_lines, min_share)
+        found = _harmonic_series(peak(int(j)), z, line, peak, df, nb, min_lines, min_share, harmonics)
         if found is not None and f_lo <= found.hz <= f_hi:
             return found
     return None
 
 
 def _harmonic_series(f1: float, z: np.ndarray, line: np.ndarray, peak, df: float, nb: int,
-                     min_lines: int, min_share: float) -> SpeedEstimate | None:
+                     min_lines: int, min_share: float, harmonics: int) -> SpeedEstimate | None:
     """The shaft rate whose 1× line peaks at ``f1`` Hz, fitted over its harmonics (module docstring);
     None without ``min_lines`` lines and lines at ``min_share`` of the harmonics the spectrum holds."""
     orders, peaks = [1.0], [f1]
     hz, sigma = f1, df / np.sqrt(12.0)
     usable = 1
-    for kk in range(2, N_HARMONICS + 1):
+    for kk in range(2, harmonics + 1):
         b = int(np.rint(kk * hz / df))
         if b < 3 or b >= nb - 2:
             break
@@ -114,12 +123,14 @@ def _harmonic_series(f1: float, z: np.ndarray, line: np.ndarray, peak, df: float
 
 def confirm_speed(x: np.ndarray, fs: float, f_lo: float, f_hi: float, band: tuple[float, float] | None
                   ) -> SpeedEstimate | None:
-    """Shaft rate in [f_lo, f_hi] Hz from any two harmonics, in the raw spectrum of ``x`` or in the squared
+    """Shaft rate in [f_lo, f_hi] Hz from two of its first harmonics, in the raw spectrum of ``x`` or in the squared
     envelope of its band ``band`` (Hz; None: not tried) (module docstring); None without either."""
-    found = estimate_speed(x, fs, f_lo, f_hi, min_lines=2, min_share=0.0)
+    found = estimate_speed(x, fs, f_lo, f_hi, min_lines=2, min_share=0.0,
+                          harmonics=CONFIRM_HARMONICS)
     if found is not None or band is None:
         return found
-    return estimate_speed(squared_envelope(x, fs, band), fs, f_lo, f_hi, min_lines=2, min_share=0.0)
+    return estimate_speed(squared_envelope(x, fs, band), fs, f_lo, f_hi, min_lines=2, min_share=0.0,
+                          harmonics=CONFIRM_HARMONICS)
 
 
 def squared_envelope(x: np.ndarray, fs: float, band: tuple[float, float]) -> np.ndarray:
