@@ -50,6 +50,7 @@ horizon at that geometry (a sensor's snapshots are all equally long).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import partial
 
@@ -257,7 +258,13 @@ class EvidenceStream:
 
     # -- samples in, evidence out -------------------------------------------------------
     def push(self, first_index: int, y, snapshot: bool = False) -> list[WindowEvidence]:
-        """Feed samples ``y`` starting at absolute index ``first_index``; return windows that became due.
+        """Every window of :meth:`windows` at once."""
+        return list(self.windows(first_index, y, snapshot))
+
+    def windows(self, first_index: int, y, snapshot: bool = False) -> Iterator[WindowEvidence]:
+        """Feed samples ``y`` starting at absolute index ``first_index``; yield the windows that became due,
+        each computed as it is taken: a caller that acts on a window's verdict (restarts the long
+        horizon, asks for its onset) does so before the next window is added, whatever the chunk size.
         ``snapshot``: a snapshot sensor's chunk (module docstring): the pause before it keeps the
         long horizon, and a snapshot shorter than one window is scored alone."""
         y = np.asarray(y, dtype=float)
@@ -273,22 +280,24 @@ class EvidenceStream:
             if self.long is not None and not snapshot:
                 self.long.stop()
         if y.size == 0:
-            return []
+            return
         self._samples.append(y)
         self._cursor.advance(first_index, y.size)
-        out = self._run()
-        if snapshot and began and self.speed is not None and self._samples.end - self._origin < self.window:
+        if not (snapshot and began):
+            yield from self._run()
+            return
+        out = list(self._run())
+        if self.speed is not None and self._samples.end - self._origin < self.window:
             short = self._snapshot_window()  # (the schedule's geometry is set: a speed is known)
             out = [short] if short is not None else []
-        return out
+        yield from out
 
     def _held(self, i0: int, i1: int) -> np.ndarray:
         """The held samples from index max(i0, oldest held) to i1 (a view)."""
         return self._samples.view(max(i0, self.retained_from), i1)[0]
 
-    def _run(self) -> list[WindowEvidence]:
+    def _run(self) -> Iterator[WindowEvidence]:
         s = self.settings
-        out = []
         have = self._samples.end
         reselect = int(s.reselect_s * self.fs)
         while True:
@@ -313,10 +322,9 @@ class EvidenceStream:
                 continue
             window = self._window(end)
             if window is not None:
-                out.append(window)
+                yield window
             self._next_end = end + self.hop
         self._trim()
-        return out
 
     def _trim(self) -> None:
         """Keep what the next re-estimation and window need."""

@@ -152,7 +152,7 @@ class SpectralFrontEnd:
 
     def push(self, hypothesis: FaultState, first_index: int, y, streams: dict[FaultState, StreamBlocks],
              expected: set, snapshot: bool = False) -> list[WindowVerdict]:
-        out = [self._verdict(w, streams) for w in self.evidence.push(first_index, y, snapshot)]
+        out = [self._verdict(w, streams) for w in self.evidence.windows(first_index, y, snapshot)]
         for st in streams.values():  # blocks before the evidence's buffer are never needed again
             st.trim(self.evidence.retained_from // st.env.decimation)
         return out
