@@ -55,6 +55,7 @@ from ..decision.not_diagnosed import RESOLUTION, SENSOR, SPEED
 from ..decision.scores import THESIS_SUMMARY_KEYS, WindowScores
 from ..decision.stream_blocks import StreamBlocks
 from ..decision.thesis_blocks import XCORR_LAG_S, explained_fraction, train_correlation
+from .angle_domain import AngleStream
 from .band_choice import BandChoice
 from .envelope_view import EnvelopeView
 from .evidence_stream import EvidenceStream, WindowEvidence
@@ -142,20 +143,52 @@ class SpectralFrontEnd:
     def __init__(self, config: DiagnoserConfig, sample_rate: float, bearing: Bearing):
         self.false_alarm_rate = config.front_end.false_alarm_rate
         self.fs = float(sample_rate)
+        self._config, self._bearing = config, bearing
         self.evidence = EvidenceStream(sample_rate, bearing, config.front_end, config.usable_bandwidth)
+        self.angle: AngleStream | None = None  # the angle-domain pre-stage, when following a changing speed
 
     def tell_speed(self, hz: float | None, tolerance: float | None = None) -> None:
-        self.evidence.tell_speed(hz, tolerance)
+        if self.angle is None:  # (in the angle domain the speed is the nominal one, its changes are points)
+            self.evidence.tell_speed(hz, tolerance)
+
+    def follow_speed(self, nominal_hz: float, top_hz: float) -> None:
+        """Decide in the angle domain from now on (module docstring): the measurement is resampled to
+        equal shaft-angle increments (:mod:`.angle_domain`) and the core sees a shaft turning at
+        ``nominal_hz``, told to a tachometer's tolerance; ``top_hz``: the highest shaft rate expected
+        (Hz), which sets the angle signal's usable bandwidth. The speed comes by
+        :meth:`tell_speed_points`. Before the first sample only."""
+        settings = self._config.front_end
+        self.angle = AngleStream(self.fs, nominal_hz)
+        usable = self.angle.usable_bandwidth(self._config.usable_bandwidth, top_hz)
+        self.evidence = EvidenceStream(self.fs, self._bearing, settings, usable)
+        self.evidence.tell_speed(nominal_hz, settings.told_tolerance)
+
+    def tell_speed_points(self, index, rad_s) -> None:
+        """Measured shaft speeds (rad/s) at input sample indices ``index`` (the angle domain's)."""
+        self.angle.speed.add(index, rad_s)
 
     def warm_up(self) -> None:
         """Nothing to prepare: the p-value tables are filled by the node's warm-up."""
 
     def push(self, hypothesis: FaultState, first_index: int, y, streams: dict[FaultState, StreamBlocks],
              expected: set, snapshot: bool = False) -> list[WindowVerdict]:
-        out = [self._verdict(w, streams) for w in self.evidence.push(first_index, y, snapshot)]
+        if self.angle is None:
+            windows = self.evidence.push(first_index, y, snapshot)
+        elif snapshot:
+            raise ValueError("a snapshot sensor's chunks are decided at one speed each, not in the angle domain")
+        else:
+            k, z = self.angle.push(first_index, y)
+            windows = self.evidence.push(k, z) if z.size else []
+        out = [self._verdict(w, streams) for w in windows]
+        retained = int(self._input_index(self.evidence.retained_from))
         for st in streams.values():  # blocks before the evidence's buffer are never needed again
-            st.trim(self.evidence.retained_from // st.env.decimation)
+            st.trim(retained // st.env.decimation)
         return out
+
+    def _input_index(self, index: int) -> float:
+        """The input sample index of the evidence's sample ``index`` (in the angle domain: where the shaft
+        reached that angle)."""
+        return index if self.angle is None else float(self.angle.input_index(index))
 
     def flush(self, streams: dict[FaultState, StreamBlocks], expected: set) -> list[WindowVerdict]:
         """Nothing pending: every window is decided when its last sample arrives."""
@@ -170,8 +203,10 @@ class SpectralFrontEnd:
         return self.false_alarm_rate * (window / self.fs) / 10800.0
 
     def _verdict(self, w: WindowEvidence, streams: dict[FaultState, StreamBlocks]) -> WindowVerdict:
-        t0, t1 = w.start / self.fs, w.end / self.fs
-        alpha = self.test_level(w.end - w.start)
+        i0, i1 = self._input_index(w.start), self._input_index(w.end)
+        t0, t1 = i0 / self.fs, i1 / self.fs
+        alpha = self.test_level(i1 - i0)  # the window's duration: more windows an hour above the nominal speed
+        real = (w.end - w.start) / (i1 - i0)  # the window's mean shaft rate over the told one (1 at constant speed)
         short = {h: e.log10p for h, e in w.evidence.items()}
         long = {h: e.log10p for h, e in w.long.items() if h in short}
         both = {h: min(lp, long.get(h, 0.0)) for h, lp in short.items()}
@@ -179,13 +214,13 @@ class SpectralFrontEnd:
         unconfirmed = w.speed_source == "told" and w.speed_sigma > UNSURE_SPEED * w.speed_hz
         scores = SpectralScores(rms=w.sensor.rms, significance={h: lp / level for h, lp in both.items()},
                                 rho={h: e.rho for h, e in w.evidence.items()},
-                                long={h: lp / level for h, lp in long.items()}, band=w.band, speed_hz=w.speed_hz,
-                                speed_sigma_hz=w.speed_sigma,
-                                told_speed_hz=math.nan if w.told_hz is None else w.told_hz,
+                                long={h: lp / level for h, lp in long.items()}, band=w.band,
+                                speed_hz=w.speed_hz * real, speed_sigma_hz=w.speed_sigma * real,
+                                told_speed_hz=math.nan if w.told_hz is None else w.told_hz * real,
                                 speed_disagrees=float(w.speed_source == "measured"),
                                 speed_unconfirmed=float(unconfirmed),
-                                horizon_s=w.horizon_windows * (w.end - w.start) / self.fs, untested=w.untested)
-        _thesis_blocks(scores, streams, w.start, w.end)
+                                horizon_s=w.horizon_windows * (i1 - i0) / self.fs, untested=w.untested)
+        _thesis_blocks(scores, streams, int(round(i0)), int(round(i1)))
         if not w.sensor.ok:
             return WindowVerdict.undiagnosed(t0, t1, scores, SENSOR, w.sensor.problem)
         if not both:
@@ -203,7 +238,7 @@ class SpectralFrontEnd:
         seen, held = _label(short, alpha), _label(long, alpha)
         since = None
         if label in w.long and seen != label:  # the long horizon's evidence alone: since when it holds
-            since = self.evidence.long_onset(label) / self.fs
+            since = self._input_index(self.evidence.long_onset(label)) / self.fs
         if FaultState.NORMAL not in (seen, held) and FaultState.UNKNOWN not in (seen, held) and held != seen:
             self.evidence.restart_long(w.start)  # the window names another fault than the long horizon
         return WindowVerdict(t0, t1, label, confidence, scores, posterior=post, evidence_since=since)
