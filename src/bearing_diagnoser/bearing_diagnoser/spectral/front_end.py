@@ -34,6 +34,26 @@ it can fit the machine's own lines (measured on HIT-SM's healthy records told 7 
 inner-race comb on the shaft harmonics of the true speed). The window is then not diagnosed
 (``speed``), until the speed is confirmed.
 
+A changing speed. Told the measured speed per sample (a tachometer, ``shaft_speed``, a
+recording's speed channel, or the speed tracked from the vibration offline), the front end decides
+in the shaft-angle domain (:meth:`SpectralFrontEnd.follow_speed`, :mod:`.angle_domain`): each
+sample is resampled to equal shaft-angle increments as it arrives, and the unchanged core sees a
+shaft turning at a fixed nominal speed, so the combs are fixed orders and the long horizon
+accumulates across the change. Window times, the thesis' blocks and onsets are mapped back to the
+input's samples; the false-alarm budget counts a window's real duration (a faster shaft: more
+windows an hour, each tested at a smaller α); the reported speed is the window's mean.
+Without a measured speed the decision holds one speed (the told one, refined every second from
+the shaft lines, a measurement held while the lines are smeared). So every second (at the first
+window ending a second after the last check) the shaft rate is measured on each of the last two
+seconds (:func:`.shaft_speed.estimate_speed`, within twice the told tolerance). When both are
+found and differ significantly (beyond 3 σ of the two) at a rate at which the highest comb term
+moves by more than one frequency bin over one window — |dfr/dt|/fr > 1/(k_top·fr·T²) for the
+highest term's order k_top and window T: 1.7 %/s at 1800 rev/min for a 6205, 0.6 %/s at 600 —
+the windows' combs smear and their speed is stale: they are not diagnosed (``speed``, "shaft
+speed changing") until a check finds one speed again. Where the shaft lines are too weak to be
+measured on one second, the check cannot see the change (the told speed then stands unconfirmed,
+and no comb is called, or a held measurement is used).
+
 The thesis' blocks of every observer stream that carries a model or a train are measured
 over the same samples (:mod:`bearing_diagnoser.decision.thesis_blocks`). A window whose
 sensor signal is unusable is reported as such and not diagnosed.
@@ -60,7 +80,12 @@ from .band_choice import BandChoice
 from .envelope_view import EnvelopeView
 from .evidence_stream import EvidenceStream, WindowEvidence
 from .fault_combs import HYPOTHESES
+from .shaft_speed import estimate_speed
 from .window_label import label_window, significance_level
+
+#: Two measurements of the shaft rate differ significantly beyond this many standard uncertainties of
+#: their difference (the speed-changing check, module docstring).
+SPEED_CHANGE_SIGMAS = 3.0
 
 #: Relative speed uncertainty above which a told speed is reported unconfirmed: a tachometer's or a rig's
 #: measured speed (2 %, σ = 1 %) is not; a nameplate's (10 %) the vibration has not confirmed is.
@@ -146,6 +171,8 @@ class SpectralFrontEnd:
         self._config, self._bearing = config, bearing
         self.evidence = EvidenceStream(sample_rate, bearing, config.front_end, config.usable_bandwidth)
         self.angle: AngleStream | None = None  # the angle-domain pre-stage, when following a changing speed
+        self._checked: int | None = None  # sample index of the last speed-change check
+        self.speed_change = 0.0  # relative rate (1/s) of a speed change too fast for one speed; 0: none seen
 
     def tell_speed(self, hz: float | None, tolerance: float | None = None) -> None:
         if self.angle is None:  # (in the angle domain the speed is the nominal one, its changes are points)
@@ -229,6 +256,11 @@ class SpectralFrontEnd:
                 f"{60 * w.speed_hz:.0f} rpm for every hypothesis: "
                 + "; ".join(f"{h.label}: {why}" for h, why in w.untested.items())))
         evidence = sorted(h.label for h, lp in both.items() if lp < level)
+        if self.angle is None and self._speed_changing(w):
+            return WindowVerdict.undiagnosed(t0, t1, scores, SPEED, (
+                f"shaft speed changing: {100 * self.speed_change:.2g} %/s between its last two measurements, too "
+                "fast for one speed over a window (the combs smear); a tachometer on shaft_speed lets the decision "
+                "follow it"))
         if unconfirmed and evidence:  # evidence at a speed the machine has not confirmed (module docstring)
             return WindowVerdict.undiagnosed(t0, t1, scores, SPEED, (
                 f"shaft speed not confirmed: told {60 * w.speed_hz:.0f} rpm ± {200 * w.speed_sigma / w.speed_hz:.0f} "
@@ -242,6 +274,31 @@ class SpectralFrontEnd:
         if FaultState.NORMAL not in (seen, held) and FaultState.UNKNOWN not in (seen, held) and held != seen:
             self.evidence.restart_long(w.start)  # the window names another fault than the long horizon
         return WindowVerdict(t0, t1, label, confidence, scores, posterior=post, evidence_since=since)
+
+
+    def _speed_changing(self, w: WindowEvidence) -> bool:
+        """Whether the shaft rate changes too fast for one speed (module docstring), checked once a
+        second on the two seconds before the window's end."""
+        told = self.evidence.told
+        if told is None or (self._checked is not None and w.end - self._checked < self.fs):
+            return self.speed_change > 0.0
+        self._checked = w.end
+        hz, tol = told
+        lo, hi = hz * (1.0 - 2.0 * tol), hz * (1.0 + 2.0 * tol)
+        lines = self.evidence.settings.speed_lines
+        x = self.evidence.recent(w.end, 2.0)
+        n = int(self.fs)
+        if x.size < 2 * n:
+            return self.speed_change > 0.0
+        a, b = (estimate_speed(part, self.fs, lo, hi, min_lines=lines) for part in (x[:n], x[n:2 * n]))
+        if a is None or b is None:
+            return self.speed_change > 0.0
+        rate = abs(b.hz - a.hz) / b.hz  # per second: the two measurements are 1 s apart
+        window = (w.end - w.start) / self.fs
+        fast = rate > 1.0 / (self.evidence.f_top * window ** 2)
+        significant = abs(b.hz - a.hz) > SPEED_CHANGE_SIGMAS * math.hypot(a.sigma, b.sigma)
+        self.speed_change = rate if fast and significant else 0.0
+        return self.speed_change > 0.0
 
 
 def _label(log10p: dict, alpha: float) -> FaultState:
