@@ -124,9 +124,9 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
             notes.emit_note(note)
         if rec.speed_varies:
             lo, hi = rec.shaft_speed.min() * 30.0 / math.pi, rec.shaft_speed.max() * 30.0 / math.pi
-            notes.emit_note(f"warning: the measured shaft speed varies from {lo:.0f} to {hi:.0f} rpm "
-                            f"({100 * rec.speed_spread:.1f} % of its mean); the decision assumes one speed, "
-                            f"the mean {rec.rpm:.0f} rpm")
+            notes.emit_note(f"the measured shaft speed varies from {lo:.0f} to {hi:.0f} rpm "
+                            f"({100 * rec.speed_spread:.1f} % of its mean): decided in the shaft-angle domain "
+                            f"(order tracking), at {rec.rpm:.0f} rpm nominal")
         res = diagnose_recording(rec, model_set=options.model_set, method=options.method, rpm=options.rpm,
                                  bearing=options.bearing or rec.bearing,
                                  keep_streams=plot_dir is not None, rpm_tolerance=options.rpm_tolerance,

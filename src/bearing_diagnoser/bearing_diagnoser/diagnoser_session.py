@@ -45,7 +45,7 @@ from bearing_common import topics
 from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.chunk_stream import ChunkStream
 from bearing_common.log_throttle import LogThrottle
-from bearing_common.model_set_info import SHIPPED_SETS
+from bearing_common.model_set_info import NONE, SHIPPED_SETS
 from bearing_common.states import FaultState
 
 from .decision.config import DiagnoserConfig
@@ -483,6 +483,11 @@ class DiagnoserSession:
             values[f"{stream.name} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
         if self.rejected_speeds:
             values["rejected shaft speeds"] = str(self.rejected_speeds)
+        if self.follow is not None and self.core is not None and self.core.follows_speed:
+            values["speed domain"] = f"shaft angle, nominal {self.follow[0]:.1f} rpm (the speed changes)"
+            if self.core.model_set not in ("", NONE):
+                values["observer models"] = ("identified at one speed: their impulse trains follow the shaft speed, "
+                                             "their models do not")
         values["input"] = f"snapshots, one every {interval:.3g} s" if self.snapshots and interval else (
             "snapshots" if self.snapshots else "stream")
         if self.untested:
