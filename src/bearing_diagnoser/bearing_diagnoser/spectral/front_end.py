@@ -44,15 +44,17 @@ input's samples; the false-alarm budget counts a window's real duration (a faste
 windows an hour, each tested at a smaller α); the reported speed is the window's mean.
 Without a measured speed the decision holds one speed (the told one, refined every second from
 the shaft lines, a measurement held while the lines are smeared). So every second (at the first
-window ending a second after the last check) the shaft rate is measured on each of the last two
-seconds (:func:`.shaft_speed.estimate_speed`, within twice the told tolerance). When both are
-found and differ significantly (beyond 3 σ of the two) at a rate at which the highest comb term
-moves by more than one frequency bin over one window — |dfr/dt|/fr > 1/(k_top·fr·T²) for the
-highest term's order k_top and window T: 1.7 %/s at 1800 rev/min for a 6205, 0.6 %/s at 600 —
-the windows' combs smear and their speed is stale: they are not diagnosed (``speed``, "shaft
-speed changing") until a check finds one speed again. Where the shaft lines are too weak to be
-measured on one second, the check cannot see the change (the told speed then stands unconfirmed,
-and no comb is called, or a held measurement is used).
+window ending a second after the last check) the shaft rate is measured on the first and the
+last half second of the last two seconds (:func:`.shaft_speed.estimate_speed`, within twice the
+told tolerance: half a second, so that a ramp of 4 %/s smears the third harmonic of 30 Hz by
+one 2 Hz bin at most). When both are found and differ significantly (beyond 3 σ of the two) at
+a rate at which the highest comb term moves by more than one frequency bin over one window —
+|dfr/dt|/fr > 1/(k_top·fr·T²) for the highest term's order k_top and window T: 1.7 %/s at
+1800 rev/min for a 6205, 0.6 %/s at 600 — the windows' combs smear and their speed is stale:
+they are not diagnosed (``speed``, "shaft speed changing") until a check finds one speed again.
+Where the shaft lines are too weak to be measured on half a second, the check cannot see the
+change (the told speed then stands unconfirmed, and no comb is called, or a held measurement is
+used).
 
 The thesis' blocks of every observer stream that carries a model or a train are measured
 over the same samples (:mod:`bearing_diagnoser.decision.thesis_blocks`). A window whose
@@ -86,6 +88,10 @@ from .window_label import label_window, significance_level
 #: Two measurements of the shaft rate differ significantly beyond this many standard uncertainties of
 #: their difference (the speed-changing check, module docstring).
 SPEED_CHANGE_SIGMAS = 3.0
+
+#: The speed-changing check measures the shaft rate on the first and the last CHECK_PART_S of the last
+#: CHECK_SPAN_S seconds (module docstring).
+CHECK_SPAN_S, CHECK_PART_S = 2.0, 0.5
 
 #: Relative speed uncertainty above which a told speed is reported unconfirmed: a tachometer's or a rig's
 #: measured speed (2 %, σ = 1 %) is not; a nameplate's (10 %) the vibration has not confirmed is.
@@ -286,14 +292,14 @@ class SpectralFrontEnd:
         hz, tol = told
         lo, hi = hz * (1.0 - 2.0 * tol), hz * (1.0 + 2.0 * tol)
         lines = self.evidence.settings.speed_lines
-        x = self.evidence.recent(w.end, 2.0)
-        n = int(self.fs)
-        if x.size < 2 * n:
+        x = self.evidence.recent(w.end, CHECK_SPAN_S)
+        n = int(CHECK_PART_S * self.fs)
+        if x.size < int(CHECK_SPAN_S * self.fs):
             return self.speed_change > 0.0
-        a, b = (estimate_speed(part, self.fs, lo, hi, min_lines=lines) for part in (x[:n], x[n:2 * n]))
+        a, b = (estimate_speed(part, self.fs, lo, hi, min_lines=lines) for part in (x[:n], x[-n:]))
         if a is None or b is None:
             return self.speed_change > 0.0
-        rate = abs(b.hz - a.hz) / b.hz  # per second: the two measurements are 1 s apart
+        rate = abs(b.hz - a.hz) / b.hz / (CHECK_SPAN_S - CHECK_PART_S)  # relative change per second
         window = (w.end - w.start) / self.fs
         fast = rate > 1.0 / (self.evidence.f_top * window ** 2)
         significant = abs(b.hz - a.hz) > SPEED_CHANGE_SIGMAS * math.hypot(a.sigma, b.sigma)
