@@ -1,7 +1,7 @@
 """The decision on a changing speed (issue 27): order tracking in front of the spectral core, with a
 tachometer; the constant-speed decision without one says "speed changing" rather than guess.
 
-Signals: ``tests/synthetic_ramps.py`` (the 6205 at 12 kHz, shaft lines and outer-race impacts that
+Signals: :mod:`benchmarks.synthetic_ramps` (the 6205 at 12 kHz, shaft lines and outer-race impacts that
 follow the shaft angle, a resonance fixed in Hz). Ramps of ±20 % and ±40 % of 1800 rev/min over 10 s.
 """
 
@@ -9,7 +9,6 @@ import math
 
 import numpy as np
 import pytest
-from synthetic_ramps import BEARING, RATE, ramp_signal
 
 from bearing_common.shaft_angle import SpeedProfile
 from bearing_common.states import FaultState
@@ -19,6 +18,7 @@ from bearing_diagnoser.order_tracking import resample_to_angle
 from bearing_diagnoser.recording_diagnosis import diagnose_recording
 from bearing_diagnoser.spectral.angle_domain import AngleStream
 from bearing_recordings.recording import MEASURED_RPM_TOLERANCE, Recording
+from benchmarks.synthetic_ramps import BEARING, RATE, ramp_signal
 
 UP20 = SpeedProfile.ramp(1620.0, 1980.0, 10.0)
 DOWN20 = SpeedProfile.ramp(1980.0, 1620.0, 10.0)
