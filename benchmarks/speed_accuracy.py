@@ -108,7 +108,8 @@ def _warped(name: str, truth: FaultState, bearing, load) -> Signal:
             cache.clear()
             cache[level] = load(level)
         rec = cache[level]
-        profile = ramp_profiles(rec.rpm)[profile_name] if profile_name != "const" else SpeedProfile.constant(rec.rpm)
+        profile = ramp_profiles(rec.rpm)[profile_name] if profile_name != "const" \
+            else SpeedProfile.from_rpm_points([(0.0, rec.rpm), (RAMP_SECONDS, rec.rpm)])
         start, end = centred_span(profile, rec.rpm, rec.duration)
         w = warp(rec.accel, rec.sample_rate, rec.rpm, profile, start, end)
         return w.accel, w.sample_rate, w.shaft_speed, float(np.mean(w.shaft_speed)) * 30 / np.pi, \

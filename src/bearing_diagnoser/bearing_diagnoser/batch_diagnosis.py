@@ -46,7 +46,8 @@ class FileOptions:
     """The options of a run, applied to every file as to one file alone (so that a file's lines in a
     batch are those of its own run): sample rate (Hz), shaft speed (rev/min) and its relative
     tolerance, channel, units or sensitivity of a file that does not state what its numbers measure,
-    the file's speed or tachometer channel (its units, pulses per revolution), bearing (None: the
+    the file's speed or tachometer channel (its units, pulses per revolution), the range to track a
+    changing speed in when none is measured (rev/min, None: the speed is taken as one), bearing (None: the
     recording's), model set, method, the machine's healthy reference (None: blind)."""
 
     sample_rate: float | None = None
@@ -58,6 +59,7 @@ class FileOptions:
     speed_channel: str | None = None
     speed_units: str | None = None
     pulses_per_rev: int = 1
+    track_speed: tuple[float, float] | None = None
     bearing: Bearing | None = None
     model_set: str | None = None
     method: str = "model"
@@ -130,7 +132,7 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
         res = diagnose_recording(rec, model_set=options.model_set, method=options.method, rpm=options.rpm,
                                  bearing=options.bearing or rec.bearing,
                                  keep_streams=plot_dir is not None, rpm_tolerance=options.rpm_tolerance,
-                                 baseline=options.baseline)
+                                 baseline=options.baseline, track_speed=options.track_speed)
     except (InputError, BearingError) as exc:
         report.error, report.status = str(exc), EXIT_BAD_INPUT
         return report
