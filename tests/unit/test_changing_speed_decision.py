@@ -5,6 +5,7 @@ Signals: :mod:`benchmarks.synthetic_ramps` (the 6205 at 12 kHz, shaft lines and 
 follow the shaft angle, a resonance fixed in Hz). Ramps of ±20 % and ±40 % of 1800 rev/min over 10 s.
 """
 
+import json
 import math
 
 import numpy as np
@@ -12,6 +13,7 @@ import pytest
 
 from bearing_common.shaft_angle import SpeedProfile
 from bearing_common.states import FaultState
+from bearing_diagnoser.diagnose_cli import main as diagnose
 from bearing_diagnoser.diagnoser_node_config import PARAMETERS
 from bearing_diagnoser.diagnoser_session import DiagnoserSession
 from bearing_diagnoser.order_tracking import resample_to_angle
@@ -133,3 +135,17 @@ def test_a_live_diagnoser_follows_a_stamped_speed_that_leaves_its_start():
     assert {r.state for r in reports} <= {FaultState.NORMAL, FaultState.OUTER_RACE, FaultState.UNKNOWN}
     health = session.health(200.0)
     assert health.values["speed domain"].startswith("shaft angle")
+
+
+def test_bearing_diagnose_tracks_a_changing_speed_from_the_vibration(tmp_path, capsys):
+    x, _ = ramp_signal(UP20, 10.0, FAULT)
+    path = tmp_path / "ramp.npz"
+    np.savez(path, accel=x, sample_rate=RATE)  # no speed: neither a number nor a series
+    rc = diagnose([str(path), "--track-speed", "1500:2200", "--bearing", "6205", "--model-set", "none", "--json"])
+    out = capsys.readouterr()
+    assert rc == 0, out.err
+    assert "tracked from the vibration" in out.err and "shaft-angle domain" in out.err
+    states = [json.loads(line)["state"] for line in out.out.splitlines()]
+    assert states[-1] == "outer_race" and not {"inner_race", "ball"} & set(states), states
+    with pytest.raises(SystemExit, match="2"):
+        diagnose([str(path), "--track-speed", "900:2200"])  # wider than an octave

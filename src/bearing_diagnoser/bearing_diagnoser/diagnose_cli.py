@@ -119,6 +119,19 @@ def _jobs(text: str) -> int:
     return n
 
 
+def _speed_range(text: str) -> tuple[float, float]:
+    """``LO:HI`` rev/min, 0 < LO < HI < 2·LO (narrower than an octave: the tracker could settle on half or
+    twice the speed otherwise)."""
+    lo, sep, hi = text.partition(":")
+    try:
+        lo, hi = float(lo), float(hi)
+    except ValueError:
+        lo = hi = -1.0
+    if not sep or not 0.0 < lo < hi < 2.0 * lo:
+        raise argparse.ArgumentTypeError(f"expected LO:HI rev/min with 0 < LO < HI < 2 LO, got {text!r}")
+    return lo, hi
+
+
 def _options(args):
     """The run's :class:`.batch_diagnosis.FileOptions`, checked once for every file (InputError,
     BearingError)."""
@@ -272,16 +285,3 @@ def main(argv=None) -> int:
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
-
-
-def _speed_range(text: str) -> tuple[float, float]:
-    """``LO:HI`` rev/min, 0 < LO < HI < 2·LO (narrower than an octave: the tracker could settle on half or
-    twice the speed otherwise)."""
-    lo, sep, hi = text.partition(":")
-    try:
-        lo, hi = float(lo), float(hi)
-    except ValueError:
-        lo = hi = -1.0
-    if not sep or not 0.0 < lo < hi < 2.0 * lo:
-        raise argparse.ArgumentTypeError(f"expected LO:HI rev/min with 0 < LO < HI < 2 LO, got {text!r}")
-    return lo, hi

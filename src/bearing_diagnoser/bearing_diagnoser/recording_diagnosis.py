@@ -191,7 +191,8 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     LOG.info("model set %s%s; bearing %s", ms, "" if model_set else " (chosen from the input)", bearing.name)
     fs = chosen.sample_rate or rec.sample_rate
     cfg = _decision_config(config or config_for(ms), method, fs, rec.sample_rate)
-    speed = _speed(rec, rpm)
+    series, tracked_rpm = _changing_speed(rec, fs, track_speed)
+    speed = rpm or tracked_rpm or (float(np.mean(series)) * 30.0 / np.pi if series is not None else _speed(rec, rpm))
     if isinstance(baseline, Recording):
         baseline = learn_recording_reference(baseline, model_set, rpm, bearing, rpm_tolerance, config)
     if baseline is not None and method == "envelope":
@@ -206,9 +207,6 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     x, truth = _at_rate(rec, fs, ms)
     observed = method == "model"
     rpm_tolerance = _told_tolerance(rec, rpm, rpm_tolerance)
-    series = _changing_speed(rec, fs, track_speed)
-    if series is not None and rpm is None:
-        speed = float(np.mean(series)) * 30.0 / np.pi
     pipeline = MonitorPipeline(bearing, ms, cfg, speed, observed,
                                STREAMS if observed or cfg.front_end.EVERY_STREAM else STREAMS[:1], keep_streams,
                                rpm_tolerance, shaft_speed=series)
@@ -221,24 +219,26 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
                          bearing, baseline.describe() if baseline is not None else "")
 
 
-def _changing_speed(rec: Recording, fs: float, track: tuple[float, float] | None) -> np.ndarray | None:
-    """The recording's speed per sample at ``fs`` Hz (rad/s) when it changes (measured, or tracked
-    within ``track`` rev/min when none is measured); None when it holds one speed."""
-    w = rec.shaft_speed
+def _changing_speed(rec: Recording, fs: float, track: tuple[float, float] | None) -> tuple[np.ndarray | None,
+                                                                                          float | None]:
+    """(the recording's speed per sample at ``fs`` Hz (rad/s) when it changes (measured, or tracked within
+    ``track`` rev/min when none is measured), None when it holds one speed; the tracked mean speed (rev/min),
+    None when none was tracked)."""
+    w, tracked = rec.shaft_speed, None
     if w is None and track is not None:
         from .order_tracking import track_speed
         w = track_speed(rec.accel, rec.sample_rate, *track).speed
-        spread = float((w.max() - w.min()) / w.mean())
+        spread, tracked = float((w.max() - w.min()) / w.mean()), float(np.mean(w)) * 30.0 / np.pi
         LOG.info("shaft speed tracked from the vibration within %g-%g rpm: %.0f to %.0f rpm", *track,
                  w.min() * 30.0 / np.pi, w.max() * 30.0 / np.pi)
     else:
         spread = rec.speed_spread
     if w is None or spread <= SPEED_VARIATION:
-        return None
+        return None, tracked
     LOG.info("the shaft speed changes by %.1f %% of its mean: decided in the shaft-angle domain", 100 * spread)
     if abs(rec.sample_rate - fs) > 1e-9 * fs:
         w = np.interp(np.arange(int(round(w.size * fs / rec.sample_rate))) / fs, np.arange(w.size) / rec.sample_rate, w)
-    return w
+    return w, tracked
 
 
 def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",
