@@ -298,6 +298,8 @@ class DiagnoserSession:
             self.shaft_rpm = rpm
             if self.follow is not None:
                 return  # (the angle domain takes the speed as it comes, from the stamped points)
+            if self.core is not None and self._core_rpm is None:
+                self._core_rpm = rpm  # the decision began on a told speed: the first measured one is the start
             if self.core is not None and self._core_rpm is not None and self._speed_t.size \
                     and self.core.follows_speed and abs(rpm / self._core_rpm - 1.0) > FOLLOW_BEYOND:
                 self._log("info", f"shaft speed changed from {self._core_rpm:.1f} to {rpm:.1f} rpm, beyond "
