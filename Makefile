@@ -70,9 +70,10 @@ speed-data: setup
 
 # detection against fault amplitude on ramps of ±10, ±20, ±40 % over 10 s (synthetic and warped development
 # recordings) with a tachometer, tacho-less and the constant-speed decision, and false alarms on healthy ramps
-# -> out/speed_accuracy.md (SPEED_ACCURACY_ARGS=--quick: a subset in about 1.5 min)
+# -> out/speed_accuracy.md, out/speed_accuracy.png (SPEED_ACCURACY_ARGS=--quick: a subset in about 1.5 min)
 speed-accuracy: setup
-	@$(VENV_PY) -m benchmarks.speed_accuracy --out out/speed_accuracy.md --docs docs/changing-speed.md $(SPEED_ACCURACY_ARGS)
+	@$(VENV_PY) -m benchmarks.speed_accuracy --out out/speed_accuracy.md --figure out/speed_accuracy.png \
+		--docs docs/changing-speed.md $(SPEED_ACCURACY_ARGS)
 
 # accuracy of the tacho-less speed tracking on synthetic, simulated and warped ramps -> out/speed_tracking.md
 speed-tracking: setup

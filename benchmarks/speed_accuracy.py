@@ -1,7 +1,8 @@
 """Accuracy under changing speed (issue 27, item 5): detection against fault amplitude at constant speed
 and on ramps, for the decision with a tachometer, tacho-less, and the constant-speed decision.
 
-    python -m benchmarks.speed_accuracy [--out out/speed_accuracy.md] [--docs docs/changing-speed.md] [--quick]
+    python -m benchmarks.speed_accuracy [--out out/speed_accuracy.md] [--figure out/speed_accuracy.png]
+                                        [--docs docs/changing-speed.md] [--quick]
 
 (``make speed-accuracy``, run by ``make accuracy``.) Three modes on every signal:
 
@@ -194,7 +195,8 @@ def ramp_result(signal: Signal, limit: float | None, profile_name: str, mode: st
     return "—", p95
 
 
-def report(faults, healthy, profiles, log) -> str:
+def report(faults, healthy, profiles, log) -> tuple[str, dict]:
+    """(the markdown report, {mode: {ramp %: [found within 3 dB, tried]}})."""
     out = ["# Accuracy under changing speed", "",
            "Detection (rows: signal and profile; per mode the first level found relative to the constant-speed "
            "limit L: `0` as low as at constant speed, `+3` within 3 dB, `0 dB` only at the recorded level, `—` not "
@@ -238,13 +240,34 @@ def report(faults, healthy, profiles, log) -> str:
             out.append(f"| {s.name}{' ⧖' if s.warped else ''} | {p} | " + " | ".join(cells) + " |")
         log(f"speed_accuracy: {s.name} in {time.time() - t0:.0f} s")
     out += ["", "Published false alarms in all: " + ", ".join(f"{m} {n}" for m, n in total.items()) + "."]
-    return "\n".join(out) + "\n"
+    return "\n".join(out) + "\n", tally
+
+
+def figure(tally: dict, path: pathlib.Path) -> None:
+    """Share of fault signals found within 3 dB of their constant-speed limit, per ramp and mode."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ramps = [k for k in ("10", "20", "40") if any(tally[m][k][1] for m in MODES)]
+    fig, ax = plt.subplots(figsize=(6.0, 3.2))
+    for i, m in enumerate(MODES):
+        share = [tally[m][k][0] / tally[m][k][1] for k in ramps]
+        ax.bar(np.arange(len(ramps)) + (i - 1) * 0.27, share, 0.27, label=m)
+    ax.set_xticks(np.arange(len(ramps)), [f"±{k} % over 10 s" for k in ramps])
+    ax.set_ylabel("found within 3 dB of constant speed")
+    ax.set_ylim(0, 1.05)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="speed_accuracy", description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out/speed_accuracy.md"))
     ap.add_argument("--quick", action="store_true", help="fewer signals, the +20 %% and -40 %% ramps only")
+    ap.add_argument("--figure", type=pathlib.Path, help="also draw the found shares per ramp and mode (PNG)")
     add_docs_option(ap, "docs/changing-speed.md")
     args = ap.parse_args(argv)
     t0 = time.time()
@@ -253,13 +276,15 @@ def main(argv=None) -> int:
     def log(text):
         print(text, file=sys.stderr, flush=True)
     try:
-        text = report(faults, healthy, QUICK_PROFILES if args.quick else PROFILES, log)
+        text, tally = report(faults, healthy, QUICK_PROFILES if args.quick else PROFILES, log)
     except InputError as exc:
         print(f"speed_accuracy: {exc}", file=sys.stderr)
         return 1
     text += f"\n{'Quick subset; ' if args.quick else ''}run time {time.time() - t0:.0f} s (one process).\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text, encoding="utf-8")
+    if args.figure:
+        figure(tally, args.figure)
     print(text)
     if args.docs:
         write_block(args.docs, "speed-accuracy", nested(text, 2), "make speed-accuracy")
