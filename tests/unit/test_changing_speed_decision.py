@@ -107,14 +107,15 @@ def test_the_angle_stream_resamples_as_it_arrives_whatever_the_chunks():
         runs.append(np.concatenate(parts))
     n = min(r.size for r in runs)
     np.testing.assert_allclose(runs[0][:n], runs[1][:n], atol=1e-7)  # (the angle summed chunk by chunk: rounding)
-    ang = (np.arange(n) + a._k0) * a.step  # output k at angle (k0 + k)·Δφ
+    ang = a.first_angle + np.arange(n) * a.step  # output k at angle φ₀ + k·Δφ
     inner = slice(100, n)  # the first outputs feel the record's start (samples before it count as 0)
     np.testing.assert_allclose(runs[0][inner], (np.cos(7 * ang) + 0.5 * np.cos(23.3 * ang))[inner], atol=1e-4)
     # the same as the offline resampling to angle at the same increments
     offline = resample_to_angle(x, fs, phi, 400)  # Δφ = 2π/400 = 2π·30 Hz/12 kHz
-    np.testing.assert_allclose(runs[0][inner], offline.samples[a._k0:a._k0 + n][inner], atol=1e-4)
+    k0 = int(round(a.first_angle / a.step))
+    np.testing.assert_allclose(runs[0][inner], offline.samples[k0:k0 + n][inner], atol=1e-4)
     # angle indices map back to the input samples where the shaft reached them
-    assert a.input_index(1000.0) == pytest.approx(np.interp((1000 + a._k0) * a.step, phi, np.arange(t.size)),
+    assert a.input_index(1000.0) == pytest.approx(np.interp(a.first_angle + 1000 * a.step, phi, np.arange(t.size)),
                                                   abs=0.5)  # (used rounded to a sample)
 
 

@@ -185,6 +185,11 @@ class AngleStream:
         self.speed.forget_before(keep - 1)
         return k0, out
 
+    @property
+    def first_angle(self) -> float | None:
+        """The shaft angle (rad, 0 at the first input sample) of angle index 0; None before any input."""
+        return None if self._k0 is None else self._k0 * self.step
+
     # -- angle indices back to input indices ----------------------------------------------
     def input_index(self, angle_index) -> np.ndarray | float:
         """The (fractional) input index where the shaft reached angle index ``angle_index`` (linear
