@@ -111,6 +111,18 @@ def test_speed_messages_beyond_the_tolerance_retune_the_train():
     assert s.observer.fault_frequency == pytest.approx(f0 / 2)
 
 
+def test_a_speed_beyond_the_identified_one_is_said_once_the_train_follows_it():
+    s = Session(speed_tolerance=0.001)
+    s.feed(0, np.zeros(N))
+    identified = s.observer.model.rpm
+    s.on_speed(2 * math.pi * identified * 1.015 / 60.0)  # within 2 %: the model holds
+    assert s.model_speed_note() == "" and not [t for level, t in s.lines if level == "warning"]
+    s.on_speed(2 * math.pi * identified * 1.2 / 60.0)
+    warned = [t for level, t in s.lines if level == "warning"]
+    assert len(warned) == 1 and f"identified at {identified:.0f} rpm" in warned[0] and s.model_speed_note() == warned[0]
+    assert s.observer.fault_frequency == pytest.approx(s.observer.model.fault_frequency * 1.2, rel=1e-6)
+
+
 def test_bearing_and_model_set_changes_rebuild_at_the_next_chunk():
     y = signal(4)
     s = Session()

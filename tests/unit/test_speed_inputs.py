@@ -134,13 +134,13 @@ def test_a_mat_speed_channel_via_load_recording(tmp_path):
         load_recording(path, sample_rate=FS, channel="vib", speed_channel="tach")
 
 
-def test_bearing_diagnose_reads_a_speed_channel_and_warns_that_the_speed_varies(tmp_path, capsys):
+def test_bearing_diagnose_reads_a_speed_channel_and_says_it_follows_the_changing_speed(tmp_path, capsys):
     path, _ = _mat_with_speed(tmp_path)
     rc = diagnose([str(path), "--sample-rate", "12000", "--channel", "vib", "--speed-channel", "rpm_trace",
                    "--speed-units", "rpm", "--method", "envelope"])
     err = capsys.readouterr().err
     assert rc == 0, err
-    assert "speed varies from 1500 to 1800 rpm" in err and "the mean 1650 rpm" in err
+    assert "speed varies from 1500 to 1800 rpm" in err and "shaft-angle domain" in err and "1650 rpm nominal" in err
     rc = diagnose([str(path), "--sample-rate", "12000", "--channel", "vib", "--speed-channel", "rpm_trace"])
     assert rc == 2 and "go together" in capsys.readouterr().err
 

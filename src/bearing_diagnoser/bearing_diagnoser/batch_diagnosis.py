@@ -46,7 +46,8 @@ class FileOptions:
     """The options of a run, applied to every file as to one file alone (so that a file's lines in a
     batch are those of its own run): sample rate (Hz), shaft speed (rev/min) and its relative
     tolerance, channel, units or sensitivity of a file that does not state what its numbers measure,
-    the file's speed or tachometer channel (its units, pulses per revolution), bearing (None: the
+    the file's speed or tachometer channel (its units, pulses per revolution), the range to track a
+    changing speed in when none is measured (rev/min, None: the speed is taken as one), bearing (None: the
     recording's), model set, method, the machine's healthy reference (None: blind)."""
 
     sample_rate: float | None = None
@@ -58,6 +59,7 @@ class FileOptions:
     speed_channel: str | None = None
     speed_units: str | None = None
     pulses_per_rev: int = 1
+    track_speed: tuple[float, float] | None = None
     bearing: Bearing | None = None
     model_set: str | None = None
     method: str = "model"
@@ -124,13 +126,13 @@ def diagnose_file(path: str, options: FileOptions, plot_dir: str | None = None, 
             notes.emit_note(note)
         if rec.speed_varies:
             lo, hi = rec.shaft_speed.min() * 30.0 / math.pi, rec.shaft_speed.max() * 30.0 / math.pi
-            notes.emit_note(f"warning: the measured shaft speed varies from {lo:.0f} to {hi:.0f} rpm "
-                            f"({100 * rec.speed_spread:.1f} % of its mean); the decision assumes one speed, "
-                            f"the mean {rec.rpm:.0f} rpm")
+            notes.emit_note(f"the measured shaft speed varies from {lo:.0f} to {hi:.0f} rpm "
+                            f"({100 * rec.speed_spread:.1f} % of its mean): decided in the shaft-angle domain "
+                            f"(order tracking), at {rec.rpm:.0f} rpm nominal")
         res = diagnose_recording(rec, model_set=options.model_set, method=options.method, rpm=options.rpm,
                                  bearing=options.bearing or rec.bearing,
                                  keep_streams=plot_dir is not None, rpm_tolerance=options.rpm_tolerance,
-                                 baseline=options.baseline)
+                                 baseline=options.baseline, track_speed=options.track_speed)
     except (InputError, BearingError) as exc:
         report.error, report.status = str(exc), EXIT_BAD_INPUT
         return report

@@ -87,6 +87,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="units of --speed-channel; pulses: a tachometer signal (edges detected)")
     p.add_argument("--pulses-per-rev", type=int, default=1, metavar="N",
                    help="tachometer pulses per shaft revolution of --speed-units pulses (default 1)")
+    p.add_argument("--track-speed", metavar="LO:HI", type=_speed_range,
+                   help="no measured speed, but the speed changes within LO-HI rev/min (narrower than an octave): "
+                        "track it from the vibration (the shaft's harmonics) and follow it (docs/changing-speed.md)")
     p.add_argument("--model-set", help="sim_48k, sim_12k, cwru_de_6205 or none (default: from the input)")
     p.add_argument("--method", choices=("model", "envelope"), default="model",
                    help="model: observers + envelope-spectrum decision (default); envelope: textbook reference")
@@ -116,6 +119,19 @@ def _jobs(text: str) -> int:
     return n
 
 
+def _speed_range(text: str) -> tuple[float, float]:
+    """``LO:HI`` rev/min, 0 < LO < HI < 2·LO (narrower than an octave: the tracker could settle on half or
+    twice the speed otherwise)."""
+    lo, sep, hi = text.partition(":")
+    try:
+        lo, hi = float(lo), float(hi)
+    except ValueError:
+        lo = hi = -1.0
+    if not sep or not 0.0 < lo < hi < 2.0 * lo:
+        raise argparse.ArgumentTypeError(f"expected LO:HI rev/min with 0 < LO < HI < 2 LO, got {text!r}")
+    return lo, hi
+
+
 def _options(args):
     """The run's :class:`.batch_diagnosis.FileOptions`, checked once for every file (InputError,
     BearingError)."""
@@ -133,6 +149,8 @@ def _options(args):
         raise InputError(f"--pulses-per-rev must be >= 1, got {args.pulses_per_rev}")
     if args.speed_channel is not None and args.rpm is not None:
         raise InputError("give either --rpm or --speed-channel, not both")
+    if args.track_speed is not None and args.speed_channel is not None:
+        raise InputError("give either --speed-channel or --track-speed, not both")
     if args.units is not None and args.sensitivity is not None:
         raise InputError("give --units or --sensitivity, not both")
     if args.sensitivity is not None:
@@ -143,7 +161,7 @@ def _options(args):
                        rpm=None if args.rpm is None else check_rpm(args.rpm), rpm_tolerance=args.rpm_tolerance,
                        channel=args.channel, units=args.units, sensitivity=args.sensitivity,
                        speed_channel=args.speed_channel, speed_units=args.speed_units,
-                       pulses_per_rev=args.pulses_per_rev,
+                       pulses_per_rev=args.pulses_per_rev, track_speed=args.track_speed,
                        bearing=load_bearing(args.bearing) if args.bearing else None, model_set=args.model_set,
                        method=args.method)
     if not args.baseline:

@@ -59,6 +59,8 @@ class Diagnoser:
         self._sample_rate = None if sample_rate is None else float(sample_rate)
         self._streams: dict[FaultState, StreamBlocks] = {}
         self._speed: tuple[float, float | None] | None = None  # told (Hz, relative tolerance)
+        self._follow: tuple[float, float] | None = None  # the angle domain's (nominal Hz, top Hz)
+        self._speed_points: list = []  # (indices, rad/s) told before the front end was built
         self._front: FrontEnd | None = None
         self._tracker = StateTracker(self.config.k_of_n, self.config.normal_k_of_n, self.config.unknown_rule())
         self.history: list[Decision] = []
@@ -94,10 +96,37 @@ class Diagnoser:
         if self._front is not None:
             self._front.tell_speed(*(self._speed or (None,)))
 
+    @property
+    def follows_speed(self) -> bool:
+        """Whether this core's front end can decide in the angle domain (:meth:`follow_speed`)."""
+        return self.config.front_end.FOLLOWS_SPEED
+
+    def follow_speed(self, nominal_rpm: float, top_rpm: float) -> None:
+        """Decide on a changing speed (before the first chunk): every chunk is resampled to equal
+        shaft-angle increments and decided as if the shaft turned at ``nominal_rpm``
+        (:mod:`.spectral.angle_domain`); ``top_rpm``: the highest speed expected. The speed comes by
+        :meth:`tell_speed_points`. ValueError for a front end that cannot (:attr:`follows_speed`)."""
+        if not self.follows_speed:
+            raise ValueError(f"the {self.config.method} decision cannot follow a changing speed")
+        self._follow = (nominal_rpm / 60.0, top_rpm / 60.0)
+
+    def tell_speed_points(self, indices, rad_s) -> None:
+        """Measured shaft speeds (rad/s) at sample indices ``indices`` (fractional allowed, increasing),
+        for the angle domain (:meth:`follow_speed`)."""
+        if self._front is None:
+            self._speed_points.append((indices, rad_s))
+        else:
+            self._front.tell_speed_points(indices, rad_s)
+
     def _front_end(self, sample_rate: float) -> FrontEnd:
         if self._front is None:
             self._front = build_front_end(self.config, sample_rate, self.bearing)
-            if self._speed is not None:
+            if self._follow is not None:
+                self._front.follow_speed(*self._follow)
+                for points in self._speed_points:
+                    self._front.tell_speed_points(*points)
+                self._speed_points = []
+            elif self._speed is not None:
                 self._front.tell_speed(*self._speed)
         return self._front
 

@@ -45,7 +45,7 @@ from bearing_common import topics
 from bearing_common.bearings import Bearing, load_bearing
 from bearing_common.chunk_stream import ChunkStream
 from bearing_common.log_throttle import LogThrottle
-from bearing_common.model_set_info import SHIPPED_SETS
+from bearing_common.model_set_info import NONE, SHIPPED_SETS
 from bearing_common.states import FaultState
 
 from .decision.config import DiagnoserConfig
@@ -69,6 +69,15 @@ HEALTH_PARAMETERS = ("machine_class", "baseline", "baseline_min_duration", "heal
 
 #: Fastest plausible shaft (rev/min): anything above is a broken speed source.
 MAX_RPM = 1e6
+
+#: Relative departure of the measured shaft speed from the one a decision began with beyond which it
+#: follows the speed in the angle domain (:mod:`.spectral.angle_domain`): a tachometer's tolerance, to
+#: which the constant-speed decision holds a measured speed (``SpectralSettings.told_tolerance``).
+FOLLOW_BEYOND = 0.02
+
+#: Seconds of measured speed kept behind the newest residual (the angle domain needs the speed of the
+#: samples it has not resampled yet: a chunk and the interpolation kernel's reach).
+SPEED_KEPT_S = 2.0
 
 SPEED_UNKNOWN = ("shaft speed unknown: estimated from the vibration, which misses most faults; "
                  "set the rpm parameter or publish shaft_speed")
@@ -160,6 +169,10 @@ class DiagnoserSession:
         self.time_offset = 0.0  # stamp of sample index 0 (s)
         self.last_heard = {h: None for h in STREAMS}
         self.shaft_rpm: float | None = None
+        # the measured speed over time (stamps s, rad/s), and how many of its points the core has
+        self._speed_t, self._speed_w, self._speed_given = np.zeros(0), np.zeros(0), 0
+        self.follow: tuple[float, float] | None = None  # deciding in the angle domain: (nominal, top rpm)
+        self._core_rpm: float | None = None  # the measured speed the current core began with
         self.last_report: StateReport | None = None
         self.not_diagnosed: NotDiagnosed | None = None  # why the last window was not diagnosed (sensor, speed, ...)
         self.untested: dict = {}  # {hypothesis: why} the last window could not test
@@ -212,9 +225,14 @@ class DiagnoserSession:
         core.keep_history = False
         core.expected = set(self.deployed)
         self._tell_speed(core)
+        self._core_rpm, self._speed_given = self.shaft_rpm, 0
+        if self.follow is not None and core.follows_speed:
+            core.follow_speed(*self.follow)
         self._log("info", f"deciding with the {cfg.method} front end ({name or 'no'} model set), bearing "
                           f"{core.bearing.name}, {cfg.front_end.describe_window()}, "
-                          f"{cfg.front_end.describe_false_alarms(cfg.pfa)}")
+                          f"{cfg.front_end.describe_false_alarms(cfg.pfa)}"
+                          + (f", in the shaft-angle domain at {self.follow[0]:.0f} rpm nominal"
+                             if self.follow is not None and core.follows_speed else ""))
         if self.speed_unknown_for(cfg):
             self._log("warning", SPEED_UNKNOWN)
         return core
@@ -238,22 +256,57 @@ class DiagnoserSession:
                 self.core.expected |= new
 
     # -- inputs ------------------------------------------------------------------------
-    def on_speed(self, rad_s: float) -> None:
-        """A ``shaft_speed`` message (rad/s); not finite, not positive or above 10⁶ rpm is refused."""
+    def on_speed(self, rad_s: float, stamp: float | None = None) -> None:
+        """A ``shaft_speed`` message (rad/s) stamped ``stamp`` (s; None: not placed in time, so it
+        cannot be followed in the angle domain); not finite, not positive or above 10⁶ rpm is refused."""
         rpm = rad_s * 60.0 / (2.0 * math.pi)
         if not (math.isfinite(rpm) and 0.0 < rpm <= MAX_RPM):
             self.rejected_speeds += 1
             self._log_repeatable("bad speed", "warning", f"ignoring shaft speed {rad_s!r} rad/s")
             return
+        if stamp is not None:
+            self._add_speed([float(stamp)], [float(rad_s)])
         self.measured_speed(rpm)
 
+    def follow_speed(self, nominal_rpm: float, top_rpm: float) -> None:
+        """Decide in the shaft-angle domain from the start (a recording whose measured speed changes,
+        told by :meth:`speed_samples`): as if the shaft turned at ``nominal_rpm``, up to ``top_rpm``
+        (:meth:`.diagnoser.Diagnoser.follow_speed`)."""
+        self.follow = (float(nominal_rpm), float(top_rpm))
+        self.core = None
+
+    def speed_samples(self, stamp: float, sample_rate: float, rad_s) -> None:
+        """A recorded speed channel's chunk: ``rad_s`` (rad/s) per sample from ``stamp`` (s) at
+        ``sample_rate`` Hz (offline runs: the speed of the vibration chunk with that stamp)."""
+        w = np.asarray(rad_s, dtype=float)
+        self._add_speed(stamp + np.arange(w.size) / float(sample_rate), w)
+
+    def _add_speed(self, stamps, rad_s) -> None:
+        self._speed_t, self._speed_w = np.r_[self._speed_t, stamps], np.r_[self._speed_w, rad_s]
+        if self.follow is None:  # nothing given to a core yet: what a restart in the angle domain needs
+            old = max(0, int(np.searchsorted(self._speed_t, self._speed_t[-1] - SPEED_KEPT_S)) - 1)
+            self._speed_t, self._speed_w, self._speed_given = self._speed_t[old:], self._speed_w[old:], 0
+
     def measured_speed(self, rpm: float) -> None:
-        """A measured shaft speed (rev/min: a tachometer, a recording's own): it overrides ``rpm``."""
+        """A measured shaft speed (rev/min: a tachometer, a recording's own): it overrides ``rpm``.
+        A speed that leaves the one the decision began with by more than :data:`FOLLOW_BEYOND`,
+        when its messages are stamped, makes the decision follow it in the shaft-angle domain
+        (restarted at the next chunk)."""
         if self.shaft_rpm is None or abs(rpm / self.shaft_rpm - 1.0) > 1e-3:
             if self.shaft_rpm is None:
                 self._log("info", f"shaft speed {rpm:.1f} rpm from {topics.SHAFT_SPEED.name}")
             self.shaft_rpm = rpm
-            if self.core is not None:
+            if self.follow is not None:
+                return  # (the angle domain takes the speed as it comes, from the stamped points)
+            if self.core is not None and self._core_rpm is None:
+                self._core_rpm = rpm  # the decision began on a told speed: the first measured one is the start
+            if self.core is not None and self._core_rpm is not None and self._speed_t.size \
+                    and self.core.follows_speed and abs(rpm / self._core_rpm - 1.0) > FOLLOW_BEYOND:
+                self._log("info", f"shaft speed changed from {self._core_rpm:.1f} to {rpm:.1f} rpm, beyond "
+                                  f"{100 * FOLLOW_BEYOND:g} %: the decision restarts in the shaft-angle domain")
+                self.follow = (self._core_rpm, self._core_rpm)
+                self.core = None
+            elif self.core is not None:
                 self._tell_speed(self.core)
 
     def on_residual(self, hypothesis: FaultState, stamp: float, first_index: int, sample_rate: float,
@@ -289,6 +342,8 @@ class DiagnoserSession:
         self._fed.add(hypothesis)
         self.deployed.add(hypothesis)
         index = self._core_index(hypothesis, verdict, stamp, first_index, sample_rate, r.size)
+        if self.follow is not None and self.core.follows_speed:
+            self._give_speed(sample_rate, stamp + r.size / sample_rate)
         e = _array(estimate)
         try:
             decisions = self.core.update(hypothesis, index, sample_rate, r, e, _array(train), fault_hz,
@@ -304,6 +359,17 @@ class DiagnoserSession:
         out = [] if decisions is None else self._published(decisions)
         self._learn(hypothesis, index, sample_rate, r if e is None else r + e, verdict.snapshot)
         return out
+
+    def _give_speed(self, sample_rate: float, newest: float) -> None:
+        """The measured speed points the core has not had yet, at its sample indices; forget those
+        :data:`SPEED_KEPT_S` behind ``newest`` (s)."""
+        t, w = self._speed_t[self._speed_given:], self._speed_w[self._speed_given:]
+        if t.size:
+            self.core.tell_speed_points((t - self.time_offset) * sample_rate, w)
+        old = int(np.searchsorted(self._speed_t, newest - SPEED_KEPT_S)) - 1
+        old = max(0, min(old, self._speed_t.size - 1))
+        self._speed_t, self._speed_w = self._speed_t[old:], self._speed_w[old:]
+        self._speed_given = self._speed_t.size
 
     def _core_index(self, hypothesis: FaultState, verdict, stamp: float, first_index: int, sample_rate: float,
                     n: int) -> int:
@@ -419,6 +485,11 @@ class DiagnoserSession:
             values[f"{stream.name} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
         if self.rejected_speeds:
             values["rejected shaft speeds"] = str(self.rejected_speeds)
+        if self.follow is not None and self.core is not None and self.core.follows_speed:
+            values["speed domain"] = f"shaft angle, nominal {self.follow[0]:.1f} rpm (the speed changes)"
+            if self.core.model_set not in ("", NONE):
+                values["observer models"] = ("identified at one speed: their impulse trains follow the shaft speed, "
+                                             "their models do not")
         values["input"] = f"snapshots, one every {interval:.3g} s" if self.snapshots and interval else (
             "snapshots" if self.snapshots else "stream")
         if self.untested:

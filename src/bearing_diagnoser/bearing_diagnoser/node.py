@@ -1,6 +1,7 @@
 """The ``diagnoser`` node: fault states from the two observers' residuals.
 
-Subscribes ``residual/outer_race``, ``residual/inner_race`` and ``shaft_speed``; publishes
+Subscribes ``residual/outer_race``, ``residual/inner_race`` and ``shaft_speed`` (stamped: a speed
+that changes beyond 2 % is followed in the shaft-angle domain, :mod:`.spectral.angle_domain`); publishes
 ``fault_state`` (FaultState, reliable + transient local: a late subscriber sees the current
 state) on every decision, and ``/diagnostics`` (status ``bearing_monitor/<motor>/drive_end``,
 hardware id the motor: the ``motor`` parameter, the namespace or the host's name; OK NORMAL,
@@ -57,7 +58,7 @@ class DiagnoserNode(Node):
                                         topics.qos(topic))
             for h, topic in topics.RESIDUALS.items()}
         self.create_subscription(ShaftSpeed, topics.SHAFT_SPEED.name, lambda msg: self.session.on_speed(
-            msg.angular_velocity), topics.qos(topics.SHAFT_SPEED))
+            msg.angular_velocity, to_seconds(msg.header.stamp) or None), topics.qos(topics.SHAFT_SPEED))
         self.create_timer(float(self.values["diagnostics_period"]), self.publish_diagnostics)
 
     def _log(self, level: str, text: str) -> None:

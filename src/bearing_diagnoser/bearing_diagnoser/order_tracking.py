@@ -1,6 +1,9 @@
 """Order tracking: vibration as a function of shaft angle, and the shaft speed from the vibration.
 
-Building blocks (offline, pure numpy/scipy; not yet wired into the decision):
+Building blocks (pure numpy/scipy). The decision resamples its stream to shaft angle as it arrives
+(:mod:`.spectral.angle_domain`, the same interpolation and anti-aliasing as :func:`resample_to_angle`);
+offline, a recording without a measured speed may take :func:`track_speed`'s
+(:func:`.recording_diagnosis.diagnose_recording`'s ``track_speed``, ``bearing-diagnose --track-speed``):
 
 * :func:`resample_to_angle` — computed order tracking: a window resampled to equal
   increments of shaft angle, the angle taken from a speed per sample or tachometer pulses

@@ -93,11 +93,16 @@ class MonitorPipeline:
         condition trend's), as the node would be given them.
     strict : bool
         A refused chunk or a decision that cannot be made raises InputError (module docstring).
+    shaft_speed : ndarray (n,), optional
+        The measured speed per sample (rad/s) of a recording whose speed changes: the observers
+        are told it per chunk (as the ``shaft_speed`` topic would), and the decision follows it in
+        the shaft-angle domain at the nominal ``rpm`` (:meth:`.diagnoser_session.DiagnoserSession.follow_speed`).
     """
 
     def __init__(self, bearing: Bearing, model_set: str, config: DiagnoserConfig, rpm: float | None = None,
                  observed: bool = True, streams: tuple = STREAMS, keep_streams: bool = False,
-                 rpm_tolerance: float | None = None, parameters: dict | None = None, strict: bool = True):
+                 rpm_tolerance: float | None = None, parameters: dict | None = None, strict: bool = True,
+                 shaft_speed: np.ndarray | None = None):
         self.model_set = model_set
         self.streams = streams
         self.strict = strict
@@ -112,6 +117,9 @@ class MonitorPipeline:
         self.diagnoser = DiagnoserSession(values, _log, bearing=bearing, config=config, keep_history=True)
         self.kept = {h: {"residual": [], "estimate": [], "impulse_train": []} for h in self.observers} \
             if keep_streams else {}
+        self.shaft_speed = None if shaft_speed is None else np.asarray(shaft_speed, dtype=float)
+        if self.shaft_speed is not None:
+            self.diagnoser.follow_speed(nominal, float(self.shaft_speed.max()) * 30.0 / np.pi)
 
     @property
     def decisions(self) -> list[Decision]:
@@ -123,6 +131,11 @@ class MonitorPipeline:
         """One vibration chunk (m/s²) whose first sample has index ``first_index``, as a sensor driver
         publishes it: stamped ``stamp`` (s; default index / rate: the recording's clock)."""
         stamp = first_index / sample_rate if stamp is None else float(stamp)
+        if self.shaft_speed is not None:
+            w = self.shaft_speed[first_index:first_index + len(samples)]
+            self.diagnoser.speed_samples(stamp, sample_rate, w)
+            for observer in self.observers.values():
+                observer.on_speed(float(w[0]))
         for h in self.streams:
             if h in self.observers:
                 out = self.observers[h].on_chunk(stamp, first_index, sample_rate, source, samples)

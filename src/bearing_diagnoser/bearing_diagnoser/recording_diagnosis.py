@@ -10,6 +10,12 @@ machine's own healthy reference (:mod:`.spectral.machine_reference`), learnt fro
 :func:`learn_recording_reference` exactly as the recording itself is read (model set, rate, speed).
 :func:`diagnose_measurement` runs the decision of a model set on a measurement alone.
 
+A recording whose measured speed changes (:attr:`~bearing_recordings.recording.Recording.speed_varies`:
+a ``shaft_speed`` series, a speed or tachometer channel) is decided in the shaft-angle domain
+(:mod:`.spectral.angle_domain`), its speed told to the observers chunk by chunk; without a
+measured speed, ``track_speed`` (a speed range) takes it from the vibration
+(:func:`.order_tracking.track_speed`, offline: the whole record first).
+
 What the run assumed (model set, resampling, speed) is logged (``logging``, logger
 ``bearing_diagnoser.recording_diagnosis``); ``bearing-diagnose`` prints it on stderr.
 """
@@ -23,7 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bearing_common.bearings import CATALOG, DEFAULT_BEARING, Bearing
-from bearing_recordings.recording import MEASURED_RPM_TOLERANCE, InputError, Recording
+from bearing_recordings.recording import MEASURED_RPM_TOLERANCE, SPEED_VARIATION, InputError, Recording
 from bearing_recordings.resampling import resample
 
 from .decision.config import DiagnoserConfig
@@ -139,7 +145,8 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
                        rpm: float | None = None, bearing: Bearing | None = None,
                        config: DiagnoserConfig | None = None, keep_streams: bool = False,
                        chunk_s: float = CHUNK_S, rpm_tolerance: float | None = None,
-                       baseline: Recording | MachineReference | None = None) -> OfflineResult:
+                       baseline: Recording | MachineReference | None = None,
+                       track_speed: tuple[float, float] | None = None) -> OfflineResult:
     """Diagnose a whole recording offline, exactly as the live graph would.
 
     Parameters
@@ -165,6 +172,10 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         The machine's own healthy reference: a healthy recording of the same machine (learnt by
         :func:`learn_recording_reference` with the same arguments) or a reference learnt before;
         None: the blind decision. The textbook method takes none.
+    track_speed : (lo, hi) rev/min, optional
+        For a recording without a measured speed whose speed changes within that range (narrower
+        than an octave): the speed per sample tracked from the vibration
+        (:func:`.order_tracking.track_speed`, its accuracy there), then decided as a measured one.
 
     Raises InputError (one line) only when the recording cannot be analysed at all, whatever its
     signal holds: an unknown method or model set, a sample rate too low for the bearing's fault
@@ -180,7 +191,8 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     LOG.info("model set %s%s; bearing %s", ms, "" if model_set else " (chosen from the input)", bearing.name)
     fs = chosen.sample_rate or rec.sample_rate
     cfg = _decision_config(config or config_for(ms), method, fs, rec.sample_rate)
-    speed = _speed(rec, rpm)
+    series, tracked_rpm = _changing_speed(rec, fs, track_speed)
+    speed = rpm or tracked_rpm or (float(np.mean(series)) * 30.0 / np.pi if series is not None else _speed(rec, rpm))
     if isinstance(baseline, Recording):
         baseline = learn_recording_reference(baseline, model_set, rpm, bearing, rpm_tolerance, config)
     if baseline is not None and method == "envelope":
@@ -197,7 +209,7 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     rpm_tolerance = _told_tolerance(rec, rpm, rpm_tolerance)
     pipeline = MonitorPipeline(bearing, ms, cfg, speed, observed,
                                STREAMS if observed or cfg.front_end.EVERY_STREAM else STREAMS[:1], keep_streams,
-                               rpm_tolerance)
+                               rpm_tolerance, shaft_speed=series)
     t_cpu = time.process_time()
     decisions = run_pipeline(pipeline, x, fs, rec.source, chunk_s)
     cpu = time.process_time() - t_cpu
@@ -205,6 +217,28 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     segs = segments_from_decisions(decisions, x.size / fs, ms)
     return OfflineResult(segs, decisions, ms, fs, speed, x, truth, pipeline.kept_streams(), cpu, method, problems,
                          bearing, baseline.describe() if baseline is not None else "")
+
+
+def _changing_speed(rec: Recording, fs: float, track: tuple[float, float] | None) -> tuple[np.ndarray | None,
+                                                                                          float | None]:
+    """(the recording's speed per sample at ``fs`` Hz (rad/s) when it changes (measured, or tracked within
+    ``track`` rev/min when none is measured), None when it holds one speed; the tracked mean speed (rev/min),
+    None when none was tracked)."""
+    w, tracked = rec.shaft_speed, None
+    if w is None and track is not None:
+        from .order_tracking import track_speed
+        w = track_speed(rec.accel, rec.sample_rate, *track).speed
+        spread, tracked = float((w.max() - w.min()) / w.mean()), float(np.mean(w)) * 30.0 / np.pi
+        LOG.info("shaft speed tracked from the vibration within %g-%g rpm: %.0f to %.0f rpm", *track,
+                 w.min() * 30.0 / np.pi, w.max() * 30.0 / np.pi)
+    else:
+        spread = rec.speed_spread
+    if w is None or spread <= SPEED_VARIATION:
+        return None, tracked
+    LOG.info("the shaft speed changes by %.1f %% of its mean: decided in the shaft-angle domain", 100 * spread)
+    if abs(rec.sample_rate - fs) > 1e-9 * fs:
+        w = np.interp(np.arange(int(round(w.size * fs / rec.sample_rate))) / fs, np.arange(w.size) / rec.sample_rate, w)
+    return w, tracked
 
 
 def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",

@@ -7,7 +7,10 @@ One :class:`ObserverSession` per node:
   set or ``none``) and builds the observer; rebuilds it at the next chunk when source or
   rate change or when ``bearing`` / ``model_set`` are set (:meth:`configure`);
 * re-tunes the train to shaft-speed messages that differ by more than
-  ``speed_tolerance`` (relative), phase kept continuous;
+  ``speed_tolerance`` (relative), phase kept continuous; the model itself (its resonances, its
+  fault order's measured value) was identified at one speed, so a speed beyond
+  :data:`MODEL_SPEED_TOLERANCE` of it is said (a warning, at most once per ``log_period``): the
+  observer follows the speed with its train only;
 * checks every chunk (:class:`bearing_common.chunk_stream.ChunkStream`): bad chunks are rejected and
   counted; a gap or a restarted producer resets the observer state, and so does each snapshot
   of a snapshot sensor (``input_mode``), without counting or logging a gap;
@@ -50,6 +53,11 @@ class ResidualChunk:
     impulse_train: np.ndarray | None  # dimensionless
     model_set: str
     fault_frequency: float   # Hz
+
+
+#: Relative departure from the speed a model set was identified at beyond which the observer says that its
+#: model holds at another speed: a tachometer's tolerance, to which the decision holds one speed.
+MODEL_SPEED_TOLERANCE = 0.02
 
 
 def _quiet(level: str, text: str) -> None:
@@ -130,6 +138,17 @@ class ObserverSession:
         self.rpm = rpm
         if self.observer is not None:
             self.observer.set_speed(rpm)
+            identified = self.observer.model.rpm
+            if math.isfinite(identified) and abs(rpm / identified - 1.0) > MODEL_SPEED_TOLERANCE:
+                self._log_repeatable("model speed", "warning", self.model_speed_note())
+
+    def model_speed_note(self) -> str:
+        """What the observer can follow of a speed its model was not identified at ("" at that speed)."""
+        identified = self.observer.model.rpm if self.observer is not None else math.nan
+        if not (math.isfinite(identified) and abs(self.rpm / identified - 1.0) > MODEL_SPEED_TOLERANCE):
+            return ""
+        return (f"model set {self._built_for[0]} was identified at {identified:.0f} rpm; the shaft turns at "
+                f"{self.rpm:.0f} rpm: the impulse train follows the speed, the identified model does not")
 
     def on_chunk(self, stamp: float, first_index: int, sample_rate: float, source: str,
                  samples: np.ndarray) -> ResidualChunk | None:

@@ -20,12 +20,14 @@ class FrontEndSettings(Protocol):
 
     ``NAME``: "spectral" or "fold"; ``NEEDS_SPEED``: whether the decision misses faults
     without a told shaft speed (it then warns); ``EVERY_STREAM``: whether it needs every
-    observer stream, or one measurement suffices.
+    observer stream, or one measurement suffices; ``FOLLOWS_SPEED``: whether it can decide on
+    a changing speed (resampled to shaft angle: :meth:`.front_end.FrontEnd.follow_speed`).
     """
 
     NAME: str
     NEEDS_SPEED: bool
     EVERY_STREAM: bool
+    FOLLOWS_SPEED: bool
 
     def unknown_k_of_n(self) -> tuple[int, int]:
         """UNKNOWN hysteresis when the configuration states none (:mod:`.state_tracker`)."""

@@ -68,6 +68,13 @@ class FrontEnd(Protocol):
     def tell_speed(self, hz: float | None, tolerance: float | None = None) -> None:
         """The shaft rate (Hz) and its relative tolerance (None: the front end's default); None = unknown."""
 
+    def follow_speed(self, nominal_hz: float, top_hz: float) -> None:
+        """Decide on a changing speed, told by :meth:`tell_speed_points` (only the front ends whose
+        settings say ``FOLLOWS_SPEED``)."""
+
+    def tell_speed_points(self, index, rad_s) -> None:
+        """Measured shaft speeds (rad/s) at sample indices ``index``, while following the speed."""
+
     def warm_up(self) -> None:
         """Compute now what the first windows would otherwise wait for (thresholds)."""
 

@@ -79,6 +79,7 @@ class FoldSettings:
     NAME = "fold"
     NEEDS_SPEED = False  # folds at the observers' fault frequencies; decoys at the nominal speed
     EVERY_STREAM = True  # explaining one hypothesis away needs the other's stream
+    FOLLOWS_SPEED = False  # folds at the observers' fault periods, which assume one speed
 
     def unknown_k_of_n(self) -> tuple[int, int]:
         """k = ceil(window / hop) + 1 of n = k + 2: evidence spanning more than one window."""

@@ -166,6 +166,15 @@ class EvidenceStream:
         if not measured or abs(self.speed[0] / hz - 1.0) > 2 * tol:
             self.speed = (float(hz), tol / 2 * hz, "told")  # used until the next re-estimation
 
+    @property
+    def told(self) -> tuple[float, float] | None:
+        """The told shaft rate (Hz) and its relative tolerance; None: none told."""
+        return self._told
+
+    def recent(self, end: int, seconds: float) -> np.ndarray:
+        """The held samples of the ``seconds`` s before index ``end`` (those held of them)."""
+        return self._held(end - int(seconds * self.fs), end)
+
     # -- geometry that follows the speed -----------------------------------------------
     def _set_geometry(self, fr: float, sigma: float) -> None:
         """Window, slip range and comb terms at shaft rate ``fr`` (Hz); ValueError when the sample

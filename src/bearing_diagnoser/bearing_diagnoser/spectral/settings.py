@@ -77,6 +77,7 @@ class SpectralSettings:
     NAME = "spectral"
     NEEDS_SPEED = True  # estimated blind, the speed misses most faults (bearing-accuracy ablation)
     EVERY_STREAM = False  # one measurement: either observer's y = r + ŷ
+    FOLLOWS_SPEED = True  # resampled to shaft angle in front of it (:mod:`.angle_domain`)
 
     def unknown_k_of_n(self) -> tuple[int, int]:
         """3 of 5: evidence spanning more than one window (hop = window / 2)."""
