@@ -26,7 +26,7 @@ class EnvelopeView:
     decision's own array: not to be modified); ``band``: the demodulation band (Hz); ``f_top``:
     the highest comb line tested (Hz; the tested range is [0, f_top]); ``shaft_hz``: the shaft
     rate the window was tested at and ``shaft_source`` where it came from (``"told"``,
-    ``"refined"``, ``"measured"``, ``"estimated"``); ``told_hz``: the told rate (None: none told);
+    ``"refined"``, ``"provisional"``, ``"measured"``, ``"estimated"``); ``told_hz``: the told rate (None: none told);
     ``terms``: {hypothesis: (J, 3) array of (c, d, is_carrier)}, a line at (c·ρ + d)·f_r
     (:func:`.fault_combs.comb_terms`); ``rho``: {hypothesis: ρ where its comb matched best}.
     """

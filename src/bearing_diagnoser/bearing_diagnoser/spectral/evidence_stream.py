@@ -23,7 +23,14 @@ Schedule, derived from the bearing and the speed (nothing fitted to a recording)
 The speed: a told one (a tachometer; a nameplate or a recording's label, ``told_tolerance``)
 is a prior. The shaft rate is measured from the 1x line and its harmonics
 (:mod:`.shaft_speed`, at least three lines) within the told tolerance, failing that from any
-two shaft harmonics in the raw or the envelope spectrum (:func:`.shaft_speed.confirm_speed`); when none is found
+two shaft harmonics in the raw or the envelope spectrum (:func:`.shaft_speed.confirm_speed`). Two lines
+of a buffer shorter than ``buffer_s`` confirm provisionally (``speed_source`` "provisional"): in its
+coarser bins two families a bin apart pass for one (HIT-SM at 1200 rpm: 2 x 10.55 Hz and 2 x 20.19 Hz
+in the 1 Hz bins of 1 s confirmed 20.41 Hz, and a healthy machine without its raw 1x family was
+called INNER_RACE; an inner-race record at 900 rpm was confirmed 0.7 % fast), so the combs are tested
+at it but not called (:mod:`.front_end`) until the full buffer confirms it, and it is withdrawn
+when the full buffer does not; the speed is re-estimated every window until an update has seen a
+full buffer. When none is found
 there but a shaft comb is plain within twice the tolerance, that measurement is used and
 said to disagree with the told speed (``speed_source`` "measured"); otherwise the told speed
 stands, with its whole tolerance as uncertainty (a wide slip search); a buffer without
@@ -88,8 +95,9 @@ class WindowEvidence:
     ``start``/``end``: sample indices (end exclusive); ``evidence``: per hypothesis
     (:data:`.fault_combs.HYPOTHESES`), empty when the sensor signal is unusable (then ``band``
     may be None); ``speed_hz``/``speed_sigma``: shaft rate used and its
-    standard uncertainty (Hz), ``speed_source`` "told", "refined", "measured" (outside the
-    told tolerance) or "estimated" (blind), ``told_hz`` the told rate (None: none);
+    standard uncertainty (Hz), ``speed_source`` "told", "refined", "provisional" (refined on a buffer
+    shorter than ``buffer_s``: not to be called on), "measured" (outside the told tolerance) or
+    "estimated" (blind), ``told_hz`` the told rate (None: none);
     ``long``: per hypothesis the long horizon's :class:`.accumulation.HorizonEvidence`,
     resting on ``horizon_windows`` windows from sample ``horizon_start`` (empty when the long
     horizon is off or holds nothing yet); ``untested``: {hypothesis: why} the window could not
@@ -162,7 +170,7 @@ class EvidenceStream:
                                                                   self.settings.told_tolerance)
         tol = self.settings.told_tolerance if tolerance is None or not self.settings.refine_speed else tolerance
         self._told = (float(hz), float(tol))
-        measured = self.speed is not None and self.speed[2] in ("refined", "measured")
+        measured = self.speed is not None and self.speed[2] in ("refined", "provisional", "measured")
         if not measured or abs(self.speed[0] / hz - 1.0) > 2 * tol:
             self.speed = (float(hz), tol / 2 * hz, "told")  # used until the next re-estimation
 
@@ -202,12 +210,15 @@ class EvidenceStream:
             found = estimate_speed(x, self.fs, hz * (1 - tol), hz * (1 + tol), min_lines=s.speed_lines) \
                 if refine else None
             measured = self.speed is not None and self.speed[2] in ("refined", "measured")
+            source = "refined"
             if refine and not measured and (found is None or self._fault_family(found.hz, hz)):
-                # any two shaft lines confirm a told speed; they never replace a measurement of the full series
+                # any two shaft lines confirm a told speed (provisionally on a short buffer: module docstring);
+                # they never replace a measurement of the full series
                 band = (self.band.low, self.band.high) if self.band is not None else None
                 found = confirm_speed(x, self.fs, hz * (1 - tol), hz * (1 + tol), band)
+                source = "refined" if x.size >= int(s.buffer_s * self.fs) else "provisional"
             if found and not self._fault_family(found.hz, hz):
-                self.speed = (found.hz, found.sigma, "refined")
+                self.speed = (found.hz, found.sigma, source)
                 return
             wider = estimate_speed(x, self.fs, hz * (1 - 2 * tol), hz * (1 + 2 * tol), min_lines=s.speed_lines) \
                 if refine else None
@@ -323,7 +334,8 @@ class EvidenceStream:
             end = self._next_end
             if end > have:
                 break
-            filling = end - self._origin < s.buffer_s * self.fs  # re-estimate every window until the buffer is full
+            # re-estimate every window until an update has seen a full buffer
+            filling = self._last_update is not None and self._last_update - self._origin < s.buffer_s * self.fs
             if self._last_update is None or end - self._last_update >= (self.hop if filling else reselect):
                 self._update(end)
             if end - self._origin < self.window:  # the window grew with a slower speed

@@ -32,7 +32,9 @@ paid for (the combs slide over it and each p-value pays for the wider search,
 Such a window can be NORMAL, but a comb significant there is not called: sliding over ±10 %
 it can fit the machine's own lines (measured on HIT-SM's healthy records told 7 % off: an
 inner-race comb on the shaft harmonics of the true speed). The window is then not diagnosed
-(``speed``), until the speed is confirmed.
+(``speed``), until the speed is confirmed. So is a window with evidence at a speed two lines of a
+buffer shorter than 2 s confirmed (``provisional``, :mod:`.evidence_stream`), until the full buffer
+confirms it.
 
 A changing speed. Told the measured speed per sample (a tachometer, ``shaft_speed``, a
 recording's speed channel, or the speed tracked from the vibration offline), the front end decides
@@ -271,6 +273,11 @@ class SpectralFrontEnd:
             return WindowVerdict.undiagnosed(t0, t1, scores, SPEED, (
                 f"shaft speed not confirmed: told {60 * w.speed_hz:.0f} rpm ± {200 * w.speed_sigma / w.speed_hz:.0f} "
                 f"%, and the {', '.join(evidence)} comb sliding over that range can fit the machine's own lines"))
+        if w.speed_source == "provisional" and evidence:  # two lines of a short buffer (module docstring)
+            return WindowVerdict.undiagnosed(t0, t1, scores, SPEED, (
+                f"shaft speed {60 * w.speed_hz * real:.0f} rpm confirmed provisionally, by two shaft lines of a "
+                f"spectrum shorter than {self.evidence.settings.buffer_s:g} s; the {', '.join(evidence)} comb is "
+                "called once a full buffer confirms that speed"))
         label, confidence, post = label_window(both, alpha)
         scores.posterior = post
         seen, held = _label(short, alpha), _label(long, alpha)
