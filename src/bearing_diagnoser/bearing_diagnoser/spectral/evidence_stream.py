@@ -29,7 +29,8 @@ coarser bins two families a bin apart pass for one (HIT-SM at 1200 rpm: 2 x 10.5
 in the 1 Hz bins of 1 s confirmed 20.41 Hz, and a healthy machine without its raw 1x family was
 called INNER_RACE; an inner-race record at 900 rpm was confirmed 0.7 % fast), so the combs are tested
 at it but not called (:mod:`.front_end`) until the full buffer confirms it, and it is withdrawn
-when the full buffer does not; the speed is re-estimated every window until an update has seen a
+when the full buffer does not; a sure told speed (a tachometer's, σ ≤ :data:`UNSURE_SPEED`) is
+not replaced by a provisional one; the speed is re-estimated every window until an update has seen a
 full buffer. When none is found
 there but a shaft comb is plain within twice the tolerance, that measurement is used and
 said to disagree with the told speed (``speed_source`` "measured"); otherwise the told speed
@@ -86,6 +87,10 @@ from .fault_combs import (
 )
 from .settings import SpectralSettings, check_resolvable
 from .shaft_speed import confirm_speed, estimate_speed
+
+#: Relative speed uncertainty above which a told speed is unconfirmed: a tachometer's or a rig's
+#: measured speed (2 %, σ = 1 %) is not; a nameplate's (10 %) the vibration has not confirmed is.
+UNSURE_SPEED = 0.01
 
 
 @dataclass(frozen=True)
@@ -217,7 +222,8 @@ class EvidenceStream:
                 band = (self.band.low, self.band.high) if self.band is not None else None
                 found = confirm_speed(x, self.fs, hz * (1 - tol), hz * (1 + tol), band)
                 source = "refined" if x.size >= int(s.buffer_s * self.fs) else "provisional"
-            if found and not self._fault_family(found.hz, hz):
+            sure = tol / 2 <= UNSURE_SPEED  # a tachometer's speed stands until a full buffer refines it
+            if found and not self._fault_family(found.hz, hz) and not (source == "provisional" and sure):
                 self.speed = (found.hz, found.sigma, source)
                 return
             wider = estimate_speed(x, self.fs, hz * (1 - 2 * tol), hz * (1 + 2 * tol), min_lines=s.speed_lines) \

@@ -82,7 +82,7 @@ from ..decision.thesis_blocks import XCORR_LAG_S, explained_fraction, train_corr
 from .angle_domain import AngleStream
 from .band_choice import BandChoice
 from .envelope_view import EnvelopeView
-from .evidence_stream import EvidenceStream, WindowEvidence
+from .evidence_stream import UNSURE_SPEED, EvidenceStream, WindowEvidence
 from .fault_combs import HYPOTHESES
 from .shaft_speed import estimate_speed
 from .window_label import label_window, significance_level
@@ -94,10 +94,6 @@ SPEED_CHANGE_SIGMAS = 3.0
 #: The speed-changing check measures the shaft rate on the first and the last CHECK_PART_S of the last
 #: CHECK_SPAN_S seconds (module docstring).
 CHECK_SPAN_S, CHECK_PART_S = 2.0, 0.5
-
-#: Relative speed uncertainty above which a told speed is reported unconfirmed: a tachometer's or a rig's
-#: measured speed (2 %, σ = 1 %) is not; a nameplate's (10 %) the vibration has not confirmed is.
-UNSURE_SPEED = 0.01
 
 
 @dataclass
