@@ -27,7 +27,8 @@ What the node does between ROS and the decision core:
   from the vibration, which misses most faults: ``bearing-accuracy`` ablation) or the state
   is UNKNOWN, ERROR for a fault, OK for NORMAL; at least WARN for a condition WARNING, ERROR
   for a condition ALARM (the trend, with its indicators, since when and slope, in the
-  key-values) —, named ``bearing_monitor/<motor>/drive_end``
+  key-values; the message says when the last window's shaft speed changed and its indicators were
+  held out of the trend, without raising the level) —, named ``bearing_monitor/<motor>/drive_end``
   with the motor as hardware id, so that ``diagnostic_aggregator`` groups a fleet's statuses
   (``config/diagnostic_aggregator.yaml``).
 """
@@ -78,6 +79,8 @@ FOLLOW_BEYOND = 0.02
 #: Seconds of measured speed kept behind the newest residual (the angle domain needs the speed of the
 #: samples it has not resampled yet: a chunk and the interpolation kernel's reach).
 SPEED_KEPT_S = 2.0
+
+SPEED_CHANGING_HELD = "speed changing: condition indicators held out of the trend"
 
 SPEED_UNKNOWN = ("shaft speed unknown: estimated from the vibration, which misses most faults; "
                  "set the rpm parameter or publish shaft_speed")
@@ -282,6 +285,7 @@ class DiagnoserSession:
         self._add_speed(stamp + np.arange(w.size) / float(sample_rate), w)
 
     def _add_speed(self, stamps, rad_s) -> None:
+        self.condition.speed(stamps, rad_s)
         self._speed_t, self._speed_w = np.r_[self._speed_t, stamps], np.r_[self._speed_w, rad_s]
         if self.follow is None:  # nothing given to a core yet: what a restart in the angle domain needs
             old = max(0, int(np.searchsorted(self._speed_t, self._speed_t[-1] - SPEED_KEPT_S)) - 1)
@@ -517,6 +521,8 @@ class DiagnoserSession:
         if condition is not None and not condition.learning:
             level = max(level, TREND_LEVEL[condition.state])
             message += f"; condition {condition.state.name}"
+        if self.last_health is not None and self.last_health.speed_changing:
+            message += f"; {SPEED_CHANGING_HELD}"
         return Health(level, message, values)
 
     @property
@@ -536,6 +542,11 @@ class DiagnoserSession:
         b = self.condition.monitor.tracker.baseline if self.condition.monitor is not None else None
         out = {"condition": "learning the baseline" if trend.learning else trend.state.name,
                "condition since (s)": f"{t0 + trend.since:.3f}"}
+        if rec.speed_changing:
+            out["condition"] += f" ({SPEED_CHANGING_HELD})"
+        held = self.condition.counts["speed changing"]
+        if held:
+            out["condition windows held out (speed changing)"] = str(held)
         if trend.moved:
             out["condition moved"] = trend.moved
             out["condition level (x baseline)"] = f"{trend.level.get(trend.moved, math.nan):.3g}"
