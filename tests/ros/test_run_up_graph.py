@@ -3,6 +3,7 @@
 Simulator, two model-free observers and the diagnoser as separate processes on
 ``config/run_up.yaml``. The diagnoser follows ``shaft_speed`` in the shaft-angle domain once the
 speed leaves its start by 2 %; it must publish OUTER_RACE before the ramp ends and never another part.
+/diagnostics says that the condition indicators are held out of the trend while the speed changes.
 """
 
 import pytest
@@ -11,6 +12,7 @@ from graph_helpers import wait_quiet, wait_spec
 from bearing_bringup.graph import GRAPH, config_path
 from bearing_common import topics
 from bearing_common.states import FaultState
+from bearing_diagnoser.diagnoser_session import SPEED_CHANGING_HELD
 
 pytestmark = pytest.mark.ros
 
@@ -26,6 +28,7 @@ def test_run_up_is_outer_race_before_the_ramp_ends(ros_graph):
     params = config_path("run_up.yaml")
     states = ros_graph.subscribe(topics.FAULT_STATE)
     vib = ros_graph.subscribe(topics.VIBRATION)
+    diagnostics = ros_graph.subscribe(topics.DIAGNOSTICS)
     members = {spec.name: ros_graph.start(spec.package, spec.executable, name=spec.name, params_file=params)
                for spec in GRAPH if spec.executable != "simulator"}
     ros_graph.wait_until(lambda: ros_graph.node.count_publishers(topics.FAULT_STATE.name) >= 1, 60.0,
@@ -51,3 +54,5 @@ def test_run_up_is_outer_race_before_the_ramp_ends(ros_graph):
     # the speed left its start: the decision went on in the shaft-angle domain
     assert any("restarts in the shaft-angle domain" in line for line in members["diagnoser"].lines), \
         ros_graph.output()
+    messages = [status.message for array in list(diagnostics) for status in array.status]
+    assert any(m.endswith(SPEED_CHANGING_HELD) for m in messages), messages
