@@ -19,6 +19,8 @@ from bearing_diagnoser.diagnoser_session import SPEED_CHANGING_HELD, DiagnoserSe
 from bearing_diagnoser.health.health_session import HealthSession, HealthSettings
 from bearing_diagnoser.health.trend import HealthState, HealthTrend, TrendConfig
 from bearing_diagnoser.health.trend_cli import main as trend
+from bearing_recordings.bag_write import recording_to_bag
+from bearing_recordings.recording import Recording
 from benchmarks.synthetic_ramps import RATE, ramp_signal
 
 BASELINE = 6
@@ -108,10 +110,23 @@ def test_diagnostics_say_when_the_indicators_are_held_out():
     assert SPEED_CHANGING_HELD not in steady.health(12.5).message
 
 
-def test_bearing_trend_flags_each_window_and_learns_after_the_run_up(tmp_path, capsys):
-    x, w = ramp_signal(RUN_UP_FIRST, 12.0, seed=5)
+def _npz(tmp_path, x, w):
     path = tmp_path / "run_up.npz"
     np.savez(path, accel=x, sample_rate=RATE, shaft_speed=w)
+    return path
+
+
+def _bag(tmp_path, x, w):
+    rec = Recording(x, RATE, None, "mat", channel="vib", path="run_up")
+    rec.set_shaft_speed(w, "run-up")
+    recording_to_bag(rec, tmp_path / "bag", chunk_duration=0.01)  # a ShaftSpeed per chunk
+    return tmp_path / "bag"
+
+
+@pytest.mark.parametrize("write", [_npz, _bag], ids=["npz", "bag"])
+def test_bearing_trend_flags_each_window_and_learns_after_the_run_up(tmp_path, capsys, write):
+    x, w = ramp_signal(RUN_UP_FIRST, 12.0, seed=5)
+    path = write(tmp_path, x, w)
     assert trend([str(path), "--json", "--window", "1", "--baseline", str(BASELINE)]) == 0
     *records, last = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
     assert [r["speed_changing"] for r in records] == [True] * 4 + [False] * 8
