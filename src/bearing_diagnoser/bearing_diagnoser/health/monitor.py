@@ -77,7 +77,7 @@ class HealthRecord:
     evidence : FaultEvidence or None
         The fault decision's comb evidence for it; None when not computed at all.
     speed_changing : bool
-        Its shaft speed changed (beyond :data:`.health_session.SPEED_CHANGING`): its indicators were
+        Its measured shaft speed spread beyond 2 % of its mean (:mod:`.health_session`): its indicators were
         held out of the trend (``trend`` is the state in force, untouched).
     """
 
