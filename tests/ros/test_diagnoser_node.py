@@ -123,3 +123,52 @@ def test_one_silent_observer_is_reported_and_decisions_continue(ros_graph):
     normal = [s for s in statuses if s.message.startswith("NORMAL")]
     assert normal and all(s.level == b"\x01" for s in normal), [(s.level, s.message) for s in statuses]  # WARN
     assert all("waiting for residual/inner_race" in s.message for s in normal)
+
+
+def test_tachometer_pulses_give_the_speed_and_the_decision_follows_them(ros_graph):
+    """shaft_pulses (as the simulator publishes them, one message per 0.01 s chunk) on a run-up: the
+    diagnoser takes the speed from the pulses, ignores a wrong shaft_speed and follows the change."""
+    from bearing_common.shaft_angle import SpeedProfile, pulse_times
+    from bearing_common.stamps import to_stamp
+    from bearing_msgs.msg import ShaftSpeed, Tachometer
+
+    fs, n, seconds = 12000.0, 120, 2.0
+    run_up = SpeedProfile.parse("0:900,10:1800")  # +18 % by 2 s
+    diags = ros_graph.subscribe(topics.DIAGNOSTICS)
+    pub_or = ros_graph.publisher(topics.RESIDUAL_OUTER_RACE)
+    pub_tacho = ros_graph.publisher(topics.TACHOMETER)
+    pub_speed = ros_graph.publisher(topics.SHAFT_SPEED)
+    node = ros_graph.start("bearing_diagnoser", "diagnoser", params={"model_set": "none", "diagnostics_period": 0.2})
+    ros_graph.wait_until(lambda: pub_or.get_subscription_count() and pub_tacho.get_subscription_count(),
+                         30.0, "the diagnoser to subscribe")
+    times = pulse_times(run_up, 0.0, seconds)
+    y = white_noise(seconds, fs, 0.1)
+    for i in range(int(seconds * fs) // n):
+        t0 = i * n / fs
+        inside = (times >= t0) & (times < t0 + n / fs)
+        tacho = Tachometer(duration=n / fs, first_pulse_index=int(np.searchsorted(times, t0)), pulses_per_revolution=1,
+                           source="test")
+        tacho.header.stamp = to_stamp(t0)
+        tacho.pulse_offsets = (times[inside] - t0).tolist()
+        pub_tacho.publish(tacho)
+        speed = ShaftSpeed(angular_velocity=3000.0 * 2 * np.pi / 60)  # 3000 rpm: wrong, the pulses win
+        speed.header.stamp = to_stamp(t0)
+        pub_speed.publish(speed)
+        msg = Residual(sample_rate=fs, first_sample_index=i * n, fault_hypothesis=1, model_set="none",
+                       fault_frequency=100.0)
+        msg.header.stamp = to_stamp(t0)
+        msg.residual = y[i * n:(i + 1) * n].tolist()
+        pub_or.publish(msg)
+        time.sleep(n / fs)  # real time: the angle domain's resampling keeps up, no queue overflows
+
+    def status():
+        return [{kv.key: kv.value for kv in s.values} for d in list(diags) for s in d.status]
+
+    chunks = int(seconds * fs) // n
+    ros_graph.wait_until(lambda: any(f"accepted {chunks}" in v.get("residual/outer_race chunks", "")
+                                     for v in status()), 20.0, "every chunk to be taken")
+    last = next(v for v in status() if f"accepted {chunks}" in v.get("residual/outer_race chunks", ""))
+    assert last["speed domain"].startswith("shaft angle")  # the decision follows the changing speed
+    assert last["shaft speed from"] == topics.TACHOMETER.name
+    assert float(last["shaft speed (rpm)"]) == pytest.approx(run_up.rpm(seconds), rel=0.02)
+    assert any("shaft speed from the tachometer pulses" in line for line in node.lines), ros_graph.output()

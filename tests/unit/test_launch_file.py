@@ -170,8 +170,9 @@ def test_graph_names_existing_executables():
         assert spec.executable in console_scripts(spec.package), f"{spec.package} has no {spec.executable}"
 
 
-def test_yaml_names_only_graph_nodes_and_declared_parameters():
-    config = yaml.safe_load((BRINGUP / "config" / CONFIG_NAME).read_text())
+@pytest.mark.parametrize("name", [CONFIG_NAME, "run_up.yaml"])
+def test_yaml_names_only_graph_nodes_and_declared_parameters(name):
+    config = yaml.safe_load((BRINGUP / "config" / name).read_text())
     by_name = {spec.name: spec for spec in GRAPH}
     assert set(config) == set(by_name), "YAML sections must be exactly the graph's node names"
     for node_name, section in config.items():

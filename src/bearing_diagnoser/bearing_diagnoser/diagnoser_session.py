@@ -27,7 +27,8 @@ What the node does between ROS and the decision core:
   from the vibration, which misses most faults: ``bearing-accuracy`` ablation) or the state
   is UNKNOWN, ERROR for a fault, OK for NORMAL; at least WARN for a condition WARNING, ERROR
   for a condition ALARM (the trend, with its indicators, since when and slope, in the
-  key-values) —, named ``bearing_monitor/<motor>/drive_end``
+  key-values; the message says when the last window's shaft speed changed and its indicators were
+  held out of the trend, without raising the level) —, named ``bearing_monitor/<motor>/drive_end``
   with the motor as hardware id, so that ``diagnostic_aggregator`` groups a fleet's statuses
   (``config/diagnostic_aggregator.yaml``).
 """
@@ -58,6 +59,7 @@ from .front_ends import MODEL_SET_DEFAULTS, NO_REFERENCE, config_for, takes_refe
 from .health.health_session import DecidedWindow, HealthSession
 from .health.indicators import fault_lines_top
 from .health.monitor import HealthRecord
+from .pulse_speed import PulseSpeed
 from .reference_session import ReferenceSession
 from .warm_up import warm_up
 
@@ -78,6 +80,12 @@ FOLLOW_BEYOND = 0.02
 #: Seconds of measured speed kept behind the newest residual (the angle domain needs the speed of the
 #: samples it has not resampled yet: a chunk and the interpolation kernel's reach).
 SPEED_KEPT_S = 2.0
+
+#: Seconds of signal time past the tachometer's last interval during which ``shaft_speed`` messages are
+#: ignored: the pulses give the speed (a speed message may come before the pulses of its instant).
+PULSES_PREFERRED_S = 1.0
+
+SPEED_CHANGING_HELD = "speed changing: condition indicators held out of the trend"
 
 SPEED_UNKNOWN = ("shaft speed unknown: estimated from the vibration, which misses most faults; "
                  "set the rpm parameter or publish shaft_speed")
@@ -180,6 +188,8 @@ class DiagnoserSession:
         self.decision_problem = ""  # why the last chunk could not be decided on (cleared by a good one)
         self.last_refusal = ""  # why the last refused chunk was refused
         self.rejected_speeds = 0
+        self.pulses = PulseSpeed()  # the speed at each tachometer pulse (shaft_pulses)
+        self._pulses_until: float | None = None  # end (s) of the tachometer's last interval
 
     def warm_up(self) -> None:
         """Compute now what the first windows would otherwise stall on: the p-value tables, the
@@ -259,6 +269,8 @@ class DiagnoserSession:
     def on_speed(self, rad_s: float, stamp: float | None = None) -> None:
         """A ``shaft_speed`` message (rad/s) stamped ``stamp`` (s; None: not placed in time, so it
         cannot be followed in the angle domain); not finite, not positive or above 10⁶ rpm is refused."""
+        if self._pulses_until is not None and (stamp is None or stamp <= self._pulses_until + PULSES_PREFERRED_S):
+            return  # the tachometer's pulses give the speed
         rpm = rad_s * 60.0 / (2.0 * math.pi)
         if not (math.isfinite(rpm) and 0.0 < rpm <= MAX_RPM):
             self.rejected_speeds += 1
@@ -267,6 +279,24 @@ class DiagnoserSession:
         if stamp is not None:
             self._add_speed([float(stamp)], [float(rad_s)])
         self.measured_speed(rpm)
+
+    def on_pulses(self, stamp: float, duration: float, offsets, first_index: int, pulses_per_rev: int) -> None:
+        """A ``shaft_pulses`` message (tachometer pulses at ``stamp`` + ``offsets`` s, in the interval of
+        ``duration`` s from ``stamp``): the speed at each pulse (:mod:`.pulse_speed`), stamped, as
+        ``shaft_speed`` would give it; from then on ``shaft_speed`` is ignored while pulses keep coming."""
+        if self._pulses_until is None:
+            self._log("info", f"shaft speed from the tachometer pulses on {topics.TACHOMETER.name}")
+        self._pulses_until = float(stamp) + float(duration)
+        t, w = self.pulses.add(stamp, offsets, first_index, pulses_per_rev)
+        ok = np.isfinite(w) & (w > 0.0) & (w * 60.0 / (2.0 * math.pi) <= MAX_RPM)
+        if not ok.all():
+            self.rejected_speeds += int((~ok).sum())
+            self._log_repeatable("bad speed", "warning", f"ignoring {int((~ok).sum())} speed(s) from tachometer "
+                                                          "pulses")
+            t, w = t[ok], w[ok]
+        if t.size:
+            self._add_speed(t, w)
+            self.measured_speed(float(w[-1]) * 60.0 / (2.0 * math.pi))
 
     def follow_speed(self, nominal_rpm: float, top_rpm: float) -> None:
         """Decide in the shaft-angle domain from the start (a recording whose measured speed changes,
@@ -282,6 +312,7 @@ class DiagnoserSession:
         self._add_speed(stamp + np.arange(w.size) / float(sample_rate), w)
 
     def _add_speed(self, stamps, rad_s) -> None:
+        self.condition.speed(stamps, rad_s)
         self._speed_t, self._speed_w = np.r_[self._speed_t, stamps], np.r_[self._speed_w, rad_s]
         if self.follow is None:  # nothing given to a core yet: what a restart in the angle domain needs
             old = max(0, int(np.searchsorted(self._speed_t, self._speed_t[-1] - SPEED_KEPT_S)) - 1)
@@ -294,7 +325,7 @@ class DiagnoserSession:
         (restarted at the next chunk)."""
         if self.shaft_rpm is None or abs(rpm / self.shaft_rpm - 1.0) > 1e-3:
             if self.shaft_rpm is None:
-                self._log("info", f"shaft speed {rpm:.1f} rpm from {topics.SHAFT_SPEED.name}")
+                self._log("info", f"shaft speed {rpm:.1f} rpm from {self.speed_source}")
             self.shaft_rpm = rpm
             if self.follow is not None:
                 return  # (the angle domain takes the speed as it comes, from the stamped points)
@@ -481,6 +512,9 @@ class DiagnoserSession:
             values["bearing"] = self.core.bearing.name
         if self.shaft_rpm is not None:
             values["shaft speed (rpm)"] = f"{self.shaft_rpm:.1f}"
+            values["shaft speed from"] = self.speed_source
+        if self.pulses.breaks:
+            values["tachometer breaks"] = str(self.pulses.breaks)
         for stream in self.streams.values():
             values[f"{stream.name} chunks"] = ", ".join(f"{k} {v}" for k, v in sorted(stream.counts.items()))
         if self.rejected_speeds:
@@ -517,6 +551,8 @@ class DiagnoserSession:
         if condition is not None and not condition.learning:
             level = max(level, TREND_LEVEL[condition.state])
             message += f"; condition {condition.state.name}"
+        if self.last_health is not None and self.last_health.speed_changing:
+            message += f"; {SPEED_CHANGING_HELD}"
         return Health(level, message, values)
 
     @property
@@ -536,6 +572,11 @@ class DiagnoserSession:
         b = self.condition.monitor.tracker.baseline if self.condition.monitor is not None else None
         out = {"condition": "learning the baseline" if trend.learning else trend.state.name,
                "condition since (s)": f"{t0 + trend.since:.3f}"}
+        if rec.speed_changing:
+            out["condition"] += f" ({SPEED_CHANGING_HELD})"
+        held = self.condition.counts["speed changing"]
+        if held:
+            out["condition windows held out (speed changing)"] = str(held)
         if trend.moved:
             out["condition moved"] = trend.moved
             out["condition level (x baseline)"] = f"{trend.level.get(trend.moved, math.nan):.3g}"
@@ -552,6 +593,11 @@ class DiagnoserSession:
         if rec.evidence is not None and rec.evidence.problem:
             out["condition fault evidence"] = rec.evidence.problem
         return out
+
+    @property
+    def speed_source(self) -> str:
+        """The topic the measured speed comes from: the tachometer's once it has published, else ``shaft_speed``."""
+        return topics.TACHOMETER.name if self._pulses_until is not None else topics.SHAFT_SPEED.name
 
     @property
     def speed_unknown(self) -> bool:

@@ -1,7 +1,9 @@
 """The ``diagnoser`` node: fault states from the two observers' residuals.
 
-Subscribes ``residual/outer_race``, ``residual/inner_race`` and ``shaft_speed`` (stamped: a speed
-that changes beyond 2 % is followed in the shaft-angle domain, :mod:`.spectral.angle_domain`); publishes
+Subscribes ``residual/outer_race``, ``residual/inner_race``, ``shaft_speed`` (stamped: a speed
+that changes beyond 2 % is followed in the shaft-angle domain, :mod:`.spectral.angle_domain`) and
+``shaft_pulses`` (tachometer pulses: when they come, the speed at each pulse, :mod:`.pulse_speed`,
+replaces ``shaft_speed``); publishes
 ``fault_state`` (FaultState, reliable + transient local: a late subscriber sees the current
 state) on every decision, and ``/diagnostics`` (status ``bearing_monitor/<motor>/drive_end``,
 hardware id the motor: the ``motor`` parameter, the namespace or the host's name; OK NORMAL,
@@ -30,7 +32,7 @@ from bearing_common.node_main import run_node_main
 from bearing_common.parameters import declare
 from bearing_common.stamps import to_seconds, to_stamp
 from bearing_common.states import FaultState
-from bearing_msgs.msg import EnvelopeSpectrum, FaultLines, HealthIndicators, Residual, ShaftSpeed
+from bearing_msgs.msg import EnvelopeSpectrum, FaultLines, HealthIndicators, Residual, ShaftSpeed, Tachometer
 from bearing_msgs.msg import FaultState as FaultStateMsg
 
 from .diagnoser_node_config import PARAMETERS
@@ -59,6 +61,9 @@ class DiagnoserNode(Node):
             for h, topic in topics.RESIDUALS.items()}
         self.create_subscription(ShaftSpeed, topics.SHAFT_SPEED.name, lambda msg: self.session.on_speed(
             msg.angular_velocity, to_seconds(msg.header.stamp) or None), topics.qos(topics.SHAFT_SPEED))
+        self.create_subscription(Tachometer, topics.TACHOMETER.name, lambda msg: self.session.on_pulses(
+            to_seconds(msg.header.stamp), msg.duration, msg.pulse_offsets, msg.first_pulse_index,
+            msg.pulses_per_revolution), topics.qos(topics.TACHOMETER))
         self.create_timer(float(self.values["diagnostics_period"]), self.publish_diagnostics)
 
     def _log(self, level: str, text: str) -> None:

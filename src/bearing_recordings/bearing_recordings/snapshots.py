@@ -60,12 +60,16 @@ class Snapshot:
         Hz.
     name : str
         Where it comes from (file name, ``file@offset``, bag stamp), for messages.
+    shaft_speed : ndarray, shape (n,), or None
+        Measured shaft speed per sample (rad/s) when the data carry one (a recording's
+        :attr:`~.recording.Recording.shaft_speed`, a bag's ``shaft_speed`` or tachometer pulses).
     """
 
     t: float
     samples: np.ndarray
     sample_rate: float
     name: str
+    shaft_speed: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
@@ -99,12 +103,15 @@ class SnapshotSource:
         return items
 
 
-def cut_stretch(t0: float, x: np.ndarray, fs: float, window: float, name: str) -> list[Snapshot]:
-    """A continuous stretch starting at ``t0`` (s) as snapshots: itself, or windows of ``window`` s."""
+def cut_stretch(t0: float, x: np.ndarray, fs: float, window: float, name: str,
+                speed: np.ndarray | None = None) -> list[Snapshot]:
+    """A continuous stretch starting at ``t0`` (s) as snapshots: itself, or windows of ``window`` s;
+    ``speed``: its shaft speed per sample (rad/s), cut alike."""
     n = int(round(window * fs))
     if n < 1 or x.size < 2 * n:
-        return [Snapshot(t0, x, fs, name)]
-    return [Snapshot(t0 + i * n / fs, x[i * n:(i + 1) * n], fs, f"{name}@{i * n / fs:g}s")
+        return [Snapshot(t0, x, fs, name, speed)]
+    return [Snapshot(t0 + i * n / fs, x[i * n:(i + 1) * n], fs, f"{name}@{i * n / fs:g}s",
+                     None if speed is None else speed[i * n:(i + 1) * n])
             for i in range(x.size // n)]
 
 
@@ -201,7 +208,7 @@ def _recordings_source(folder: Path, files: list, channel, sample_rate, rpm, win
             src.rpm = src.rpm if src.rpm is not None else rec.rpm
             t0 = rec.start_time if rec.start_time else t_next
             t_next = t0 + rec.duration
-            yield from cut_stretch(t0, rec.accel, rec.sample_rate, window, f.name)
+            yield from cut_stretch(t0, rec.accel, rec.sample_rate, window, f.name, rec.shaft_speed)
 
     src._items = items()
     return src
@@ -222,7 +229,9 @@ def _bag_source(path: Path, channel, sample_rate, rpm, window) -> SnapshotSource
 
     def items():
         for first, x, fs in stretches:
-            yield from cut_stretch(first.stamp, x, sample_rate or fs, window, f"chunk at {first.stamp:.6f} s")
+            rate = sample_rate or fs
+            speed = contents.speed_at(first.stamp + np.arange(x.size) / rate)
+            yield from cut_stretch(first.stamp, x, rate, window, f"chunk at {first.stamp:.6f} s", speed)
 
     src._items = items()
     return src

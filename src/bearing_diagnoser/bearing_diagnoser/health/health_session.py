@@ -19,6 +19,14 @@ trend, the code ``bearing-trend`` runs — with the fault decision's comb eviden
 (:class:`.monitor.FaultEvidence`): the scores of the decided window that ended last inside
 it, or why there is none.
 
+A changing shaft speed. The measured speed (:meth:`HealthSession.speed`: ``shaft_speed``'s stamped
+values, a recording's speed per sample) is kept alongside; a window or snapshot over which it spreads
+by more than :data:`bearing_recordings.recording.SPEED_VARIATION` (2 % of its mean: what a measured
+speed is trusted to, and beyond which the fault decision follows the speed in the shaft-angle domain)
+is scored, but held out of the trend (:meth:`.trend.HealthTrend.hold`): the indicators follow the
+speed through a run-up, not the machine's condition, and would neither make a baseline nor a
+departure from one. Its record says so (``speed_changing``).
+
 The trend is the machine's life: it outlives restarts of the fault decision (a parameter
 change, another model set). It begins again, with a new baseline, when the measurement does
 (time going back: a replay started over) or changes its sample rate.
@@ -30,6 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bearing_recordings.recording import SPEED_VARIATION
+
 from ..decision.not_diagnosed import NotDiagnosed
 from .iso20816 import DEFAULT_MACHINE_CLASS
 from .monitor import FaultEvidence, HealthMonitor, HealthRecord
@@ -37,6 +47,12 @@ from .trend import TrendConfig
 
 #: Health window of a stream (s): about one message a second.
 DEFAULT_PERIOD = 1.0
+
+#: Seconds of measured shaft speed kept ahead of the last window scored (a snapshot's length at most).
+SPEED_KEPT_S = 60.0
+
+#: Speed batches gathered before they are joined and trimmed (``shaft_speed`` brings one value each).
+SPEED_BATCHES = 256
 
 
 @dataclass(frozen=True)
@@ -89,7 +105,8 @@ class HealthSession:
         self._window_t: float | None = None  # its first sample's stamp (s)
         self._pending_snapshot = False  # the window being filled is one chunk that may prove a snapshot
         self._decided: list[DecidedWindow] = []  # decided windows not yet matched to a record
-        self.counts = {"records": 0, "broken windows": 0, "unfit": 0}
+        self._speeds: list = []  # batches (stamps s, rad/s) of the measured shaft speed, in time order
+        self.counts = {"records": 0, "broken windows": 0, "unfit": 0, "speed changing": 0}
 
     def configure(self, settings: HealthSettings) -> None:
         """New settings: a new machine class applies to the next record; anything else begins the trend again."""
@@ -102,6 +119,42 @@ class HealthSession:
     def decided(self, windows: list[DecidedWindow]) -> None:
         """The fault decision's windows decided since the last call (ends in time order)."""
         self._decided.extend(windows)
+
+    def speed(self, stamps, rad_s) -> None:
+        """Measured shaft speeds (rad/s) at ``stamps`` (s, the data's clock, increasing)."""
+        self._speeds.append((np.asarray(stamps, dtype=float).ravel(), np.asarray(rad_s, dtype=float).ravel()))
+        if len(self._speeds) > SPEED_BATCHES:
+            t, _ = self._joined_speeds()
+            self._keep_speeds_from(t[-1] - SPEED_KEPT_S)
+
+    def _joined_speeds(self) -> tuple:
+        """(stamps, rad/s) of the speeds kept, as one batch; only the newest run when time went back."""
+        t = np.concatenate([b[0] for b in self._speeds])
+        w = np.concatenate([b[1] for b in self._speeds])
+        back = np.flatnonzero(np.diff(t) < 0)
+        if back.size:  # a replay started over: its new speeds only
+            t, w = t[back[-1] + 1:], w[back[-1] + 1:]
+        self._speeds = [(t, w)]
+        return t, w
+
+    def _keep_speeds_from(self, t0: float) -> None:
+        """Forget the speeds before the last one at or before ``t0`` (s)."""
+        t, w = self._speeds[0]
+        k = max(0, int(np.searchsorted(t, t0, side="right")) - 1)
+        self._speeds = [(t[k:], w[k:])]
+
+    def speed_changing(self, t: float, end: float) -> bool:
+        """Whether the measured speed spreads by more than :data:`SPEED_VARIATION` of its mean from
+        ``t`` to ``end`` (s): its values inside, and at both ends interpolated (held beyond the
+        measured ones); False without a measured speed."""
+        if not self._speeds:
+            return False
+        ts, ws = self._joined_speeds()
+        if not ts.size:
+            return False
+        inside = (ts > t) & (ts < end)
+        w = np.concatenate([np.interp([t, end], ts, ws), ws[inside]])
+        return bool((w.max() - w.min()) / w.mean() > SPEED_VARIATION)
 
     def push(self, stamp: float, sample_rate: float, y: np.ndarray, snapshot: bool, f_top: float,
              restart: bool = False, no_evidence: str = "") -> list[HealthRecord]:
@@ -174,11 +227,15 @@ class HealthSession:
             evidence = inside[-1].evidence()
         else:
             evidence = FaultEvidence(problem=no_evidence or "no fault decision ended in this window")
-        record = self.monitor.update(t, x, self._rate, evidence=evidence)
+        changing = self.speed_changing(t, end)
+        if self._speeds:
+            self._keep_speeds_from(end)
+        record = self.monitor.update(t, x, self._rate, evidence=evidence, speed_changing=changing)
         if record is None:
             self.counts["unfit"] += 1
             return []
         self.counts["records"] += 1
+        self.counts["speed changing"] += changing
         if self.history is not None:
             self.history.append(record)
         return [record]

@@ -76,6 +76,9 @@ class HealthRecord:
         State, since when, slope (times relative to the first snapshot).
     evidence : FaultEvidence or None
         The fault decision's comb evidence for it; None when not computed at all.
+    speed_changing : bool
+        Its measured shaft speed spread beyond 2 % of its mean (:mod:`.health_session`): its indicators were
+        held out of the trend (``trend`` is the state in force, untouched).
     """
 
     t: float
@@ -83,12 +86,13 @@ class HealthRecord:
     iso_zone: str
     trend: TrendRecord
     evidence: FaultEvidence | None = None
+    speed_changing: bool = False
 
     def to_json(self) -> dict:
         """One ``bearing-trend`` line: ``{"t", "state", "indicators", ...}`` (t relative, s)."""
         out = {"t": self.trend.t, "state": self.trend.state.name.lower(),
                "indicators": self.indicators.to_json(), "iso_zone": self.iso_zone or None,
-               "trend": self.trend.to_json()}
+               "trend": self.trend.to_json(), "speed_changing": self.speed_changing}
         if self.evidence is not None:
             out["evidence"] = self.evidence.to_json()
         return out
@@ -118,12 +122,13 @@ class HealthMonitor:
         self.sensor_problems: list = []  # (t, problem) of the windows not scored
 
     def update(self, t: float, samples, sample_rate: float, envelope_band: tuple | None = None,
-               evidence: FaultEvidence | None = None) -> HealthRecord | None:
+               evidence: FaultEvidence | None = None, speed_changing: bool = False) -> HealthRecord | None:
         """Score the window starting at ``t`` (s): ``samples`` in m/s² at ``sample_rate`` Hz.
 
         ``envelope_band`` (Hz) overrides the default demodulation band (which stays put, so that
         the envelope RMS trends one band over a life); ``evidence`` is passed through to the
-        record. Returns None,
+        record; ``speed_changing``: the window's shaft speed changed, its indicators are computed but
+        held out of the trend (:meth:`.trend.HealthTrend.hold`). Returns None,
         and records the problem in :attr:`sensor_problems`, when the sensor signal is unfit
         (flat, clipped, coarsely quantised: :func:`bearing_diagnoser.decision.sensor_health.check_window`);
         such a window does not enter the trend.
@@ -135,9 +140,9 @@ class HealthMonitor:
             return None
         band = envelope_band if envelope_band is not None else default_envelope_band(sample_rate, self.f_top)
         ind = condition_indicators(x, sample_rate, band)
-        trend = self.tracker.update(t, ind.trended())
+        trend = self.tracker.hold(t) if speed_changing else self.tracker.update(t, ind.trended())
         zone = iso_zone(ind.velocity_rms, self.machine) if math.isfinite(ind.velocity_rms) else ""
-        return HealthRecord(float(t), ind, zone, trend, evidence)
+        return HealthRecord(float(t), ind, zone, trend, evidence, speed_changing)
 
     def summary(self) -> dict:
         """The trend's summary (:meth:`.trend.HealthTrend.summary`) and the windows not scored."""

@@ -226,12 +226,7 @@ class HealthTrend:
     # ------------------------------------------------------------------------------------
     def update(self, t: float, indicators: Mapping[str, float]) -> TrendRecord:
         """Take the indicators of the snapshot starting at ``t`` (s, the data's clock)."""
-        if self.t0 is None:
-            self.t0 = float(t)
-        rel = float(t) - self.t0
-        if rel < self._last:
-            raise ValueError(f"snapshots must come in time order: {rel:.6g} s after {self._last:.6g} s")
-        self._last = rel
+        rel = self._place(t)
         y = np.array([_log(indicators.get(n)) for n in self.names])
         k = self.snapshots % self._t.size
         self._t[k], self._y[k] = rel, y
@@ -268,6 +263,23 @@ class HealthTrend:
         moved = self.names[int(np.argmax(ranked))] if np.isfinite(ranked).any() else ""
         return TrendRecord(rel, self.state, self.since, False, dict(zip(self.names, np.exp(d[:p]).tolist())),
                            dict(zip(self.names, score.tolist())), slope, moved)
+
+    def _place(self, t: float) -> float:
+        """``t`` (s) relative to the first window or snapshot; ValueError when it goes back in time."""
+        if self.t0 is None:
+            self.t0 = float(t)
+        rel = float(t) - self.t0
+        if rel < self._last:
+            raise ValueError(f"snapshots must come in time order: {rel:.6g} s after {self._last:.6g} s")
+        self._last = rel
+        return rel
+
+    def hold(self, t: float) -> TrendRecord:
+        """A window or snapshot starting at ``t`` (s, the data's clock) held out of the trend (its shaft
+        speed changing: the indicators follow the speed, not the machine's condition): not learnt from,
+        not charted; the record says the state in force, with the slopes of the windows taken."""
+        rel = self._place(t)
+        return TrendRecord(rel, self.state, self.since, self.baseline is None, {}, {}, self._slopes(), "")
 
     def _median(self) -> np.ndarray:
         """Median of the last three log values per indicator (of fewer at the start; NaN ignored)."""

@@ -11,9 +11,11 @@ one machine's life, fed as a snapshot sensor's chunks through the diagnoser sess
 (:class:`.health_session.HealthSession`) with the fault-comb evidence each snapshot could
 give (``"evidence"``: a 0.1 s snapshot tests no hypothesis at 1800 rpm, and says why).
 Stdout, when it is not a terminal or with ``--json``: one JSON object per snapshot or window,
-``{"t", "state", "indicators", ...}`` (t in s after the PATH's first snapshot, on the data's
-own clock), then ``{"summary": {...}}``; with several PATHs every line carries ``"path"``. On
-a terminal: each state change as it comes, then the summary in words
+``{"t", "state", "indicators", ..., "speed_changing"}`` (t in s after the PATH's first snapshot, on
+the data's own clock; ``speed_changing``: the data's measured shaft speed — a ``.npz``'s
+``shaft_speed``, a bag's ``shaft_speed`` or tachometer pulses — spread by more than 2 % over
+it, and its indicators were held out of the trend), then ``{"summary": {...}}``; with several PATHs
+every line carries ``"path"``. On a terminal: each state change as it comes, then the summary in words
 (:func:`.reports.terminal_text.trend_text`). ``--report DIR`` writes one HTML page per PATH
 (:mod:`.reports.trend_page`). Stderr: what was read and assumed, damaged
 snapshots (skipped and counted), the baseline and its limits; on bad input one ``error:``
@@ -116,6 +118,8 @@ def run_path(path: str, args, tag: dict, readable: bool = False):
         if pipeline is None:
             pipeline, first, rate = monitor_pipeline(source, args), snap.t, snap.sample_rate
         fs = rate if abs(snap.sample_rate / rate - 1.0) <= SAME_RATE else snap.sample_rate
+        if snap.shaft_speed is not None:  # a window whose speed changes is held out of the trend
+            pipeline.diagnoser.speed_samples(snap.t, fs, snap.shaft_speed)
         pipeline.feed(int(round((snap.t - first) * fs)), fs, snap.samples, source.source or "snapshots", stamp=snap.t)
         for rec in pipeline.diagnoser.take_health():
             records.append(rec)
