@@ -34,6 +34,7 @@ import numpy as np
 from scipy.special import betaincinv, gammaincc, gammaincinv, gammaln
 
 from .envelope_spectrum import N_MED
+from .gamma_tail import lentz_product
 
 J_MAX = 16
 S_MAX = 650.0
@@ -93,31 +94,19 @@ def averaged_median(k: int, n_nodes: int = 128) -> tuple[np.ndarray, float]:
     return nodes, float(gammaincinv(k, 0.5) / k)
 
 
-def log10_gamma_sf(a, x) -> np.ndarray:
+def log10_gamma_sf(a, x, per_row: bool = False) -> np.ndarray:
     """log10 Q(a, x), the regularised upper incomplete gamma, without underflow: scipy's value
-    where it is above 1e-280, else the continued fraction of Q (Lentz; x > a there)."""
+    where it is above 1e-280, else the continued fraction of Q (Lentz; x > a there;
+    :func:`.gamma_tail.lentz_product`), iterated until all those elements converged, or, with
+    ``per_row``, those of each row (first axis) of the 2-d broadcast: each row exactly as if alone."""
     a, x = np.broadcast_arrays(np.asarray(a, float), np.asarray(x, float))
     q = gammaincc(a, x)
     out = np.log10(np.maximum(q, 1e-300))
     tiny = q < 1e-280
     if np.any(tiny):
         at, xt = a[tiny], x[tiny]
-        b = xt + 1.0 - at
-        c = np.full_like(xt, 1e300)
-        d = 1.0 / b
-        h = d.copy()
-        for i in range(1, 200):
-            an = -i * (i - at)
-            b = b + 2.0
-            d = an * d + b
-            d = np.where(np.abs(d) < 1e-300, 1e-300, d)
-            c = b + an / c
-            c = np.where(np.abs(c) < 1e-300, 1e-300, c)
-            d = 1.0 / d
-            step = d * c
-            h = h * step
-            if np.all(np.abs(step - 1.0) < 1e-12):
-                break
+        counts = tiny.reshape(tiny.shape[0], -1).sum(axis=1) if per_row else [at.size]
+        h = lentz_product(np.ascontiguousarray(at), np.ascontiguousarray(xt), np.r_[0, np.cumsum(counts)])
         out[tiny] = (-xt + at * np.log(xt) - gammaln(at) + np.log(h)) / np.log(10.0)
     return out
 
@@ -128,11 +117,11 @@ def averaged_comb_log10p(s, j, k: int) -> np.ndarray:
     s, j = np.broadcast_arrays(np.asarray(s, float), np.asarray(j, float))
     nodes, med = averaged_median(int(k))
     lq = log10_gamma_sf((j * k)[..., None], (k * np.maximum(s, 0.0) / med)[..., None] * nodes)
-    out = (_logsumexp(lq * np.log(10.0)) - np.log(nodes.size)) / np.log(10.0)
+    out = (logsumexp_rows(lq * np.log(10.0)) - np.log(nodes.size)) / np.log(10.0)
     return np.where(j > 0, np.minimum(out, 0.0), 0.0)
 
 
-def _logsumexp(a: np.ndarray) -> np.ndarray:
+def logsumexp_rows(a: np.ndarray) -> np.ndarray:
     """ln Σ exp(a) over the last axis of ``a``: scipy.special.logsumexp's arithmetic (the
     maxima taken out of the sum, log1p of the rest), without its per-call overhead (a third of a
     long-horizon window's cost). A row holding NaN (a comb of no terms) gives NaN, silently."""
