@@ -1,9 +1,10 @@
 """The spectral decision's exact shortcuts against the plain formulations they replace, bit for bit.
 
 The compiled continued fraction of the gamma tail (:mod:`bearing_diagnoser.spectral.gamma_tail`), the
-onset's runs tested at once (:func:`.fault_combs.recent_run_evidence`) and the kept term bins
-(:func:`.fault_combs.term_bins`) promise the very numbers the decision computed before; the references
-below are those computations.
+onset's runs tested at once (:func:`.fault_combs.recent_run_evidence`), the kept term bins
+(:func:`.fault_combs.term_bins`) and the long horizon's rows left out when they cannot hold the
+smallest p-value (:func:`.fault_combs.smallest_log10p`) promise the very numbers the decision computed
+before; the references below are those computations.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from bearing_diagnoser.spectral.accumulation import CombGeometry
 from bearing_diagnoser.spectral.fault_combs import (
     SHAFT_MASK_BINS,
     best_scale,
+    comb_evidence,
     comb_sums,
     comb_terms,
     log10p_k,
@@ -27,7 +29,12 @@ from bearing_diagnoser.spectral.fault_combs import (
     scales,
     term_bins,
 )
-from bearing_diagnoser.spectral.significance import averaged_median, log10_gamma_sf
+from bearing_diagnoser.spectral.significance import (
+    averaged_comb_log10p,
+    averaged_comb_log10p_rows,
+    averaged_median,
+    log10_gamma_sf,
+)
 
 RNG = np.random.default_rng(26)
 
@@ -132,3 +139,47 @@ def test_term_bins_are_kept_and_read_only():
     assert again[0] is idx and again[1] is active  # the same arguments: the arrays kept
     assert not idx.flags.writeable and not active.flags.writeable
     assert averaged_median(2)[0].size == 128
+
+
+def comb_rows(rows: int, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(S, J) of ``rows`` combs over k averaged windows: no terms, noise, and lines from weak to the far tail."""
+    j = RNG.integers(0, 10, size=rows)
+    s = np.where(j > 0, j * RNG.uniform(0.3, 1.5, size=rows), 0.0)
+    strong = RNG.random(rows) < 0.3
+    s[strong] *= RNG.uniform(1.0, 60.0, size=int(strong.sum()))
+    assert (log10_gamma_sf(j * k, k * s) < -280).any()  # some rows reach the continued fraction
+    return s, j
+
+
+@pytest.mark.parametrize("k", [2, 7, 32])
+def test_averaged_p_values_of_some_rows_are_those_of_all(k):
+    s, j = comb_rows(60, k)
+    rows = RNG.random(60) < 0.4
+    got = averaged_comb_log10p_rows(s, j, k, rows)
+    assert_array_equal(got[rows], averaged_comb_log10p(s, j, k)[rows])
+    assert np.isnan(got[~rows]).all()
+
+
+@pytest.mark.parametrize("k", [2, 5, 16])
+@pytest.mark.parametrize("line", [0.0, 0.6, 3.0])
+def test_rows_left_out_cannot_hold_the_smallest_p_value(k, line):
+    g = geometry()
+    df = g.fs / g.window
+    z = RNG.gamma(k, 1.0 / k, size=(40, 400)) * np.log(2.0)
+    bins = np.rint(np.arange(1, 4) * g.terms[FaultState.OUTER_RACE][0, 0] * g.fr * 0.99 / df).astype(int)
+    z[:, bins] += line * RNG.uniform(0.0, 1.0, size=(40, 1))  # rows from noise to a clear comb
+    args = (z, df, g.fr, g.terms, g.rho, True, 40, k)
+    plain, pruned = comb_evidence(*args), comb_evidence(*args, prune=True)
+    left_out = 0
+    for h in plain:
+        lp, got = plain[h][0], pruned[h][0]
+        best = int(np.argmin(lp))
+        assert int(np.argmin(got)) == best and np.signbit(got[best]) == np.signbit(lp[best])
+        kept = np.isfinite(got)
+        assert_array_equal(got[kept], lp[kept])
+        assert (lp[~kept] > lp[best]).all()
+        left_out += int((~kept).sum())
+        for a, b in zip(plain[h][1:], pruned[h][1:]):
+            assert_array_equal(a, b)
+    if line >= 3.0:
+        assert left_out > 0  # a clear comb leaves the noise rows out

@@ -38,11 +38,20 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy.special import gammaincc
 
 from bearing_common.bearings import Bearing
 from bearing_common.states import FaultState
 
-from .significance import averaged_comb_log10p, averaged_median, comb_log10p, log10_gamma_sf, logsumexp_rows
+from .significance import (
+    TAIL,
+    averaged_comb_log10p,
+    averaged_comb_log10p_rows,
+    averaged_median,
+    comb_log10p,
+    log10_gamma_sf,
+    logsumexp_rows,
+)
 
 #: The fault hypotheses the envelope spectrum tests.
 HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL)
@@ -141,14 +150,16 @@ def rho_range(u: float, slip_search: bool = True) -> tuple[float, float]:
 
 
 def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[float, float],
-                  mask_shaft: bool = True, n_bands: int = 1, k: int = 1, exclude=()) -> dict:
+                  mask_shaft: bool = True, n_bands: int = 1, k: int = 1, exclude=(), prune: bool = False) -> dict:
     """Per hypothesis, per row of ``z`` (m, n_bins) of normalised SES: the best comb match.
 
     Returns {hypothesis: (log10 p (m,), ρ (m,), S (m,), J (m,))} arrays; ``df`` = bin width
     (Hz), ``fr`` = shaft rate (Hz). ``k``: the spectra are averages of k windows
     (:func:`.significance.averaged_comb_log10p`; each row's best ρ is found with the p-value at
     the normalising median's median, then its p-value computed exactly). ``exclude``:
-    frequencies (Hz) another explanation holds; a term within 1.5 bins of one is not used.
+    frequencies (Hz) another explanation holds; a term within 1.5 bins of one is not used. ``prune``
+    (k > 1): log10 p only where it can be the smallest of the rows, +inf elsewhere
+    (:func:`smallest_log10p`; the smallest, its row and its ties exact).
     """
     z = np.atleast_2d(z)
     out = {}
@@ -160,8 +171,36 @@ def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[f
         s, j = comb_sums(z, df, fr, t, rhos, mask_shaft, exclude)
         best = best_scale(s, j, k)[:, 0]
         s_best = s[np.arange(z.shape[0]), best]
-        out[h] = (np.minimum(0.0, log10p_k(s_best, j[best], k) + np.log10(n_cells * n_bands)), rhos[best], s_best,
-                  j[best])
+        c = np.log10(n_cells * n_bands)
+        lp = smallest_log10p(s_best, j[best], k, c) if prune and k > 1 else np.minimum(0.0, log10p_k(s_best, j[best], k)
+                                                                                        + c)
+        out[h] = (lp, rhos[best], s_best, j[best])
+    return out
+
+
+#: Decades by which a row's bounds must clear the others' to be left out (:func:`smallest_log10p`): far
+#: above the p-values' rounding.
+PRUNE_MARGIN = 1e-6
+
+
+def smallest_log10p(s: np.ndarray, j: np.ndarray, k: int, c: float) -> np.ndarray:
+    """min(0, log10 p + ``c``) of comb sums S with J terms over k > 1 averaged windows, per row, exactly as
+    :func:`comb_evidence` gives it at every row that holds or ties the smallest; +inf at the others. The
+    mean over the normalising median's nodes of Q lies between its largest term (the first node) and a
+    :data:`.significance.averaged_median` node count's fraction of it: rows whose bound from below
+    clears the best bound from above by :data:`PRUNE_MARGIN` are not computed, nor rows surely at 0."""
+    nodes, med = averaged_median(k)
+    jf = np.asarray(j, float)
+    q0 = gammaincc(jf * k, k * np.maximum(s, 0.0) / med * nodes[0])
+    lq0 = np.log10(np.maximum(q0, 1e-300))
+    tail = q0 < TAIL
+    upper = np.where(jf > 0, np.minimum(np.where(tail, np.log10(TAIL), lq0), 0.0), 0.0)
+    lower = np.where(jf > 0, np.where(tail, -np.inf, np.minimum(lq0 - np.log10(nodes.size), 0.0)), 0.0)
+    zero = lower + c > PRUNE_MARGIN
+    need = ~zero & (np.minimum(0.0, lower + c) <= np.minimum(0.0, upper + c).min() + PRUNE_MARGIN)
+    out = np.where(zero, 0.0, np.inf)
+    if np.any(need):
+        out[need] = np.minimum(0.0, averaged_comb_log10p_rows(s, j, k, need)[need] + c)
     return out
 
 

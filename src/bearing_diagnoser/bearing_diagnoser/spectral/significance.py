@@ -40,6 +40,9 @@ J_MAX = 16
 S_MAX = 650.0
 S_STEP = 0.05
 
+#: Q below this is taken from the continued fraction (:func:`log10_gamma_sf`): scipy's value underflows.
+TAIL = 1e-280
+
 
 @lru_cache(maxsize=1)
 def median_nodes(n_nodes: int = 128) -> np.ndarray:
@@ -69,8 +72,10 @@ def _rows(js) -> None:
 
 
 def warm_up() -> None:
-    """Tabulate every comb size now (about 2 s), not on a live stream's first windows."""
+    """Tabulate every comb size now (about 2 s) and compile or load the tail's continued fraction
+    (:mod:`.gamma_tail`), not on a live stream's first windows."""
     _rows(range(1, J_MAX + 1))
+    log10_gamma_sf(np.array([3.0]), np.array([900.0]))
 
 
 def comb_log10p(s, j) -> np.ndarray:
@@ -102,7 +107,7 @@ def log10_gamma_sf(a, x, per_row: bool = False) -> np.ndarray:
     a, x = np.broadcast_arrays(np.asarray(a, float), np.asarray(x, float))
     q = gammaincc(a, x)
     out = np.log10(np.maximum(q, 1e-300))
-    tiny = q < 1e-280
+    tiny = q < TAIL
     if np.any(tiny):
         at, xt = a[tiny], x[tiny]
         counts = tiny.reshape(tiny.shape[0], -1).sum(axis=1) if per_row else [at.size]
@@ -119,6 +124,47 @@ def averaged_comb_log10p(s, j, k: int) -> np.ndarray:
     lq = log10_gamma_sf((j * k)[..., None], (k * np.maximum(s, 0.0) / med)[..., None] * nodes)
     out = (logsumexp_rows(lq * np.log(10.0)) - np.log(nodes.size)) / np.log(10.0)
     return np.where(j > 0, np.minimum(out, 0.0), 0.0)
+
+
+def averaged_comb_log10p_rows(s, j, k: int, rows: np.ndarray) -> np.ndarray:
+    """:func:`averaged_comb_log10p` of 1-d ``s`` and ``j`` at the rows ``rows`` (boolean) alone, bit for bit
+    (NaN at the others): the other rows take part only in the continued fraction's stopping, which waits
+    for every tail element of the call (:func:`log10_gamma_sf`); their tail nodes are found by bisection
+    (Q falls with x, and x with the node), a few evaluations of Q per row instead of one per node."""
+    s, j = np.broadcast_arrays(np.asarray(s, float), np.asarray(j, float))
+    nodes, med = averaged_median(int(k))
+    a = np.broadcast_to((j * k)[:, None], (s.size, nodes.size))
+    x = (k * np.maximum(s, 0.0) / med)[:, None] * nodes
+    q = np.full(x.shape, np.nan)
+    q[rows] = gammaincc(a[rows], x[rows])
+    lq = np.log10(np.maximum(q, 1e-300))
+    tiny = q < TAIL
+    tiny[~rows] = _tail_nodes(a[~rows, 0], x[~rows])
+    if np.any(tiny):
+        at, xt = a[tiny], x[tiny]
+        h = lentz_product(np.ascontiguousarray(at), np.ascontiguousarray(xt), np.array([0, at.size]))
+        wanted = np.broadcast_to(rows[:, None], x.shape)[tiny]
+        at, xt, h = at[wanted], xt[wanted], h[wanted]
+        lq[tiny & rows[:, None]] = (-xt + at * np.log(xt) - gammaln(at) + np.log(h)) / np.log(10.0)
+    out = np.full(s.shape, np.nan)
+    lse = (logsumexp_rows(lq[rows] * np.log(10.0)) - np.log(nodes.size)) / np.log(10.0)
+    out[rows] = np.where(j[rows] > 0, np.minimum(lse, 0.0), 0.0)
+    return out
+
+
+def _tail_nodes(a: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Whether Q(a, x) < :data:`TAIL` at each node of rows of ``x`` (n, nodes; rising along a row) with
+    ``a`` (n,), by bisection for each row's first such node."""
+    n, m = x.shape
+    lo = np.where(gammaincc(a, x[:, -1]) < TAIL, 0, m) if n else np.zeros(0, int)
+    hi = np.where(lo == 0, m - 1, m)
+    while np.any(lo < hi):
+        act = np.flatnonzero(lo < hi)
+        mid = (lo[act] + hi[act]) // 2
+        below = gammaincc(a[act], x[act, mid]) < TAIL
+        hi[act] = np.where(below, mid, hi[act])
+        lo[act] = np.where(below, lo[act], mid + 1)
+    return np.arange(m)[None, :] >= lo[:, None]
 
 
 def logsumexp_rows(a: np.ndarray) -> np.ndarray:
