@@ -82,7 +82,8 @@ def comb_log10p(s, j) -> np.ndarray:
     """log10 P(S > s) for combs of ``j`` bins (j = 0 gives 0), elementwise, by table lookup."""
     s = np.clip(np.asarray(s, float), 0.0, S_MAX)
     j = np.clip(np.asarray(j, int), 0, J_MAX)
-    _rows(np.unique(j))
+    if np.isnan(_TABLE[:, 0]).any():  # a comb size not tabulated yet (before warm_up)
+        _rows(np.unique(j))
     pos = s / S_STEP
     i = np.minimum(pos.astype(int), _GRID.size - 2)
     w = pos - i
