@@ -29,6 +29,7 @@ MODULES = (
     "benchmarks.sim_benchmarks",
     "benchmarks.obs_benchmarks",
     "benchmarks.diag_benchmarks",
+    "benchmarks.decision_cost",
     "benchmarks.batch_benchmarks",
     "benchmarks.bag_benchmarks",
     "benchmarks.graph_benchmarks",

@@ -22,7 +22,8 @@ The decision, by where to look (no rclpy anywhere except ``node``):
   :mod:`~.spectral.band_choice` (how the demodulation band is picked),
   :mod:`~.spectral.envelope_spectrum` (prewhitening, squared envelope spectrum),
   :mod:`~.spectral.fault_combs` (OR, IR, BALL combs over slip),
-  :mod:`~.spectral.significance` (p-values), :mod:`~.spectral.window_label` (label, posterior),
+  :mod:`~.spectral.significance` (p-values), :mod:`~.spectral.gamma_tail` (the far tail, compiled),
+  :mod:`~.spectral.window_label` (label, posterior),
   :mod:`~.spectral.shaft_speed` (the speed from the 1x line)
 - :mod:`.fold`                 the folding front end (simulator model sets):
   :mod:`~.fold.settings`, :mod:`~.fold.front_end`, :mod:`~.fold.scoring` (window statistics, label),

@@ -171,7 +171,8 @@ class Accumulation:
         best = None
         for spectra, index in rows:
             lp, rho, s, j = comb_evidence(spectra, self.df, g.fr, {h: g.terms[h]}, g.rho, self.mask_shaft, n_bands,
-                                          self.windows, np.r_[exclude, g.known(spectra, self.df, self.windows)])[h]
+                                          self.windows, np.r_[exclude, g.known(spectra, self.df, self.windows)],
+                                          prune=True)[h]
             r = int(np.argmin(lp))
             if best is None or lp[r] < best.log10p:
                 i, row = index[r]

@@ -71,10 +71,10 @@ def band_ses(X: np.ndarray, n: int, fs: float, bands: np.ndarray, f_max: float |
     idx = np.clip(k1[:, None] + np.arange(width)[None, :], 0, X.size - 1)
     env = np.abs(np.fft.ifft(X[idx], axis=1)) ** 2
     env -= env.mean(axis=1, keepdims=True)
-    ses = np.abs(np.fft.rfft(env * hann(width), axis=1)) ** 2
-    if f_max is not None:
-        ses = ses[:, : int(np.ceil(f_max / df_x)) + N_MED + 2]
-    return ses, df_x
+    spectrum = np.fft.rfft(env * hann(width), axis=1)
+    if f_max is not None:  # cut before squaring: the bins dropped are not worth their magnitude
+        spectrum = spectrum[:, : int(np.ceil(f_max / df_x)) + N_MED + 2]
+    return np.abs(spectrum) ** 2, df_x
 
 
 def band_kurtosis(X: np.ndarray, n: int, fs: float, bands: np.ndarray) -> np.ndarray:

@@ -35,13 +35,23 @@ band was chosen by this same evidence.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
+from scipy.special import gammaincc
 
 from bearing_common.bearings import Bearing
 from bearing_common.states import FaultState
 
-from .significance import averaged_comb_log10p, averaged_median, comb_log10p, log10_gamma_sf
+from .significance import (
+    TAIL,
+    averaged_comb_log10p,
+    averaged_comb_log10p_rows,
+    averaged_median,
+    comb_log10p,
+    log10_gamma_sf,
+    logsumexp_rows,
+)
 
 #: The fault hypotheses the envelope spectrum tests.
 HYPOTHESES = (FaultState.OUTER_RACE, FaultState.INNER_RACE, FaultState.BALL)
@@ -140,14 +150,16 @@ def rho_range(u: float, slip_search: bool = True) -> tuple[float, float]:
 
 
 def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[float, float],
-                  mask_shaft: bool = True, n_bands: int = 1, k: int = 1, exclude=()) -> dict:
+                  mask_shaft: bool = True, n_bands: int = 1, k: int = 1, exclude=(), prune: bool = False) -> dict:
     """Per hypothesis, per row of ``z`` (m, n_bins) of normalised SES: the best comb match.
 
     Returns {hypothesis: (log10 p (m,), ρ (m,), S (m,), J (m,))} arrays; ``df`` = bin width
     (Hz), ``fr`` = shaft rate (Hz). ``k``: the spectra are averages of k windows
     (:func:`.significance.averaged_comb_log10p`; each row's best ρ is found with the p-value at
     the normalising median's median, then its p-value computed exactly). ``exclude``:
-    frequencies (Hz) another explanation holds; a term within 1.5 bins of one is not used.
+    frequencies (Hz) another explanation holds; a term within 1.5 bins of one is not used. ``prune``
+    (k > 1): log10 p only where it can be the smallest of the rows, +inf elsewhere
+    (:func:`smallest_log10p`; the smallest, its row and its ties exact).
     """
     z = np.atleast_2d(z)
     out = {}
@@ -159,23 +171,70 @@ def comb_evidence(z: np.ndarray, df: float, fr: float, terms: dict, rho: tuple[f
         s, j = comb_sums(z, df, fr, t, rhos, mask_shaft, exclude)
         best = best_scale(s, j, k)[:, 0]
         s_best = s[np.arange(z.shape[0]), best]
-        out[h] = (np.minimum(0.0, log10p_k(s_best, j[best], k) + np.log10(n_cells * n_bands)), rhos[best], s_best,
-                  j[best])
+        c = np.log10(n_cells * n_bands)
+        lp = smallest_log10p(s_best, j[best], k, c) if prune and k > 1 else np.minimum(0.0, log10p_k(s_best, j[best], k)
+                                                                                        + c)
+        out[h] = (lp, rhos[best], s_best, j[best])
+    return out
+
+
+#: Decades by which a row's bounds must clear the others' to be left out (:func:`smallest_log10p`): far
+#: above the p-values' rounding.
+PRUNE_MARGIN = 1e-6
+
+
+def smallest_log10p(s: np.ndarray, j: np.ndarray, k: int, c: float) -> np.ndarray:
+    """min(0, log10 p + ``c``) of comb sums S with J terms over k > 1 averaged windows, per row, exactly as
+    :func:`comb_evidence` gives it at every row that holds or ties the smallest; +inf at the others. The
+    mean over the normalising median's nodes of Q lies between its largest term (the first node) and a
+    :data:`.significance.averaged_median` node count's fraction of it: rows whose bound from below
+    clears the best bound from above by :data:`PRUNE_MARGIN` are not computed, nor rows surely at 0."""
+    nodes, med = averaged_median(k)
+    jf = np.asarray(j, float)
+    q0 = gammaincc(jf * k, k * np.maximum(s, 0.0) / med * nodes[0])
+    lq0 = np.log10(np.maximum(q0, 1e-300))
+    tail = q0 < TAIL
+    upper = np.where(jf > 0, np.minimum(np.where(tail, np.log10(TAIL), lq0), 0.0), 0.0)
+    lower = np.where(jf > 0, np.where(tail, -np.inf, np.minimum(lq0 - np.log10(nodes.size), 0.0)), 0.0)
+    zero = lower + c > PRUNE_MARGIN
+    need = ~zero & (np.minimum(0.0, lower + c) <= np.minimum(0.0, upper + c).min() + PRUNE_MARGIN)
+    out = np.where(zero, 0.0, np.inf)
+    if np.any(need):
+        out[need] = np.minimum(0.0, averaged_comb_log10p_rows(s, j, k, need)[need] + c)
     return out
 
 
 def recent_run_evidence(z: np.ndarray, df: float, geometry, hypothesis: FaultState, mask_shaft: bool = True
                         ) -> np.ndarray:
     """log10 p of ``hypothesis``' comb (at ``geometry``, :class:`.accumulation.CombGeometry`) in each row
-    r of ``z``: the normalised mean SES of the last r + 1 windows (no band-choice factor)."""
+    r of ``z``: the normalised mean SES of the last r + 1 windows (no band-choice factor). Every row is
+    tested as :func:`comb_evidence` tests a spectrum of r + 1 windows, the rows of two windows and more
+    at once (:func:`averaged_run_log10p`)."""
     t = geometry.terms[hypothesis]
     rhos, n_cells = scales(t, geometry.rho, df, geometry.fr)
     s, j = comb_sums(z, df, geometry.fr, t, rhos, mask_shaft, ())
-    out = np.empty(z.shape[0])
-    for r in range(z.shape[0]):
-        best = best_scale(s[r:r + 1], j, r + 1)[0, 0]
-        out[r] = min(0.0, log10p_k(s[r:r + 1, best], j[best:best + 1], r + 1)[0] + np.log10(n_cells))
-    return out
+    best = best_scale(s[:1], j, 1)[0, 0]
+    lp = np.r_[log10p_k(s[0, best:best + 1], j[best:best + 1], 1), averaged_run_log10p(s[1:], j)]
+    lp = lp + np.log10(n_cells)
+    return np.where(lp < 0.0, lp, 0.0)
+
+
+def averaged_run_log10p(s: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """log10 p of the best scale of each row r of S (rows, scales) with J (scales), row r from spectra
+    averaged over k = r + 2 windows: per row bit for bit :func:`best_scale` and
+    :func:`.significance.averaged_comb_log10p` with that k (one call for all rows, not one per row)."""
+    if not s.shape[0]:
+        return np.empty(0)
+    ks = np.arange(2, s.shape[0] + 2)[:, None]
+    nodes = np.stack([averaged_median(int(k))[0] for k in ks[:, 0]])
+    med = np.array([averaged_median(int(k))[1] for k in ks[:, 0]])[:, None]
+    mid = nodes[:, nodes.shape[1] // 2:nodes.shape[1] // 2 + 1]
+    score = np.where(j[None, :] > 0, log10_gamma_sf(j[None, :] * ks, ks * s * mid / med, per_row=True), 0.0)
+    best = np.argmin(score, axis=1)  # the first of equals
+    s_best, j_best = s[np.arange(s.shape[0]), best], np.asarray(j[best], float)[:, None]
+    lq = log10_gamma_sf(j_best * ks, ks * np.maximum(s_best[:, None], 0.0) / med * nodes, per_row=True)
+    out = (logsumexp_rows(lq * np.log(10.0)) - np.log(nodes.shape[1])) / np.log(10.0)
+    return np.where(j_best[:, 0] > 0, np.minimum(out, 0.0), 0.0)
 
 
 def scales(t: np.ndarray, rho: tuple[float, float], df: float, fr: float) -> tuple[np.ndarray, int]:
@@ -191,16 +250,31 @@ def term_bins(df: float, fr: float, t: np.ndarray, rhos: np.ndarray, nb: int, ma
               ) -> tuple[np.ndarray, np.ndarray]:
     """Bin (n_rho, J) of each term of comb ``t`` at each scale of ``rhos`` in a spectrum of ``nb`` bins, and
     whether it counts: inside the spectrum, not on a shaft harmonic (with ``mask_shaft``), not within
-    1.5 bins of a frequency of ``exclude`` (Hz)."""
+    1.5 bins of a frequency of ``exclude`` (Hz). Read-only arrays, kept for the next window that asks
+    with the same arguments (the geometry changes rarely)."""
+    t, rhos = np.asarray(t, float), np.asarray(rhos, float)
+    exclude = tuple(np.atleast_1d(np.asarray(exclude, float)).tolist())
+    return _term_bins(float(df), float(fr), t.tobytes(), t.shape, rhos.tobytes(), int(nb), bool(mask_shaft), exclude)
+
+
+@lru_cache(maxsize=256)
+def _term_bins(df: float, fr: float, t_bytes: bytes, t_shape: tuple, rhos_bytes: bytes, nb: int, mask_shaft: bool,
+               exclude: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`term_bins` of the arrays given as bytes (hashable)."""
+    t = np.frombuffer(t_bytes).reshape(t_shape)
+    rhos = np.frombuffer(rhos_bytes)
     f = (t[None, :, 0] * rhos[:, None] + t[None, :, 1]) * fr  # (n_rho, J)
     idx = np.rint(f / df).astype(int)
     active = (idx >= 1) & (idx < nb)
     if mask_shaft:
         order = np.rint(f / fr)
         active &= ~((order >= 1) & (np.abs(f - order * fr) < SHAFT_MASK_BINS * df))
-    for g in np.atleast_1d(np.asarray(exclude, float)):
+    for g in exclude:
         active &= np.abs(f - g) >= SHAFT_MASK_BINS * df
-    return np.clip(idx, 0, nb - 1), active
+    idx = np.clip(idx, 0, nb - 1)
+    idx.setflags(write=False)
+    active.setflags(write=False)
+    return idx, active
 
 
 def comb_sums(z: np.ndarray, df: float, fr: float, t: np.ndarray, rhos: np.ndarray, mask_shaft: bool,

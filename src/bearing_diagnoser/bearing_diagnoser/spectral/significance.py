@@ -34,10 +34,14 @@ import numpy as np
 from scipy.special import betaincinv, gammaincc, gammaincinv, gammaln
 
 from .envelope_spectrum import N_MED
+from .gamma_tail import lentz_product
 
 J_MAX = 16
 S_MAX = 650.0
 S_STEP = 0.05
+
+#: Q below this is taken from the continued fraction (:func:`log10_gamma_sf`): scipy's value underflows.
+TAIL = 1e-280
 
 
 @lru_cache(maxsize=1)
@@ -68,15 +72,18 @@ def _rows(js) -> None:
 
 
 def warm_up() -> None:
-    """Tabulate every comb size now (about 2 s), not on a live stream's first windows."""
+    """Tabulate every comb size now (about 2 s) and compile or load the tail's continued fraction
+    (:mod:`.gamma_tail`), not on a live stream's first windows."""
     _rows(range(1, J_MAX + 1))
+    log10_gamma_sf(np.array([3.0]), np.array([900.0]))
 
 
 def comb_log10p(s, j) -> np.ndarray:
     """log10 P(S > s) for combs of ``j`` bins (j = 0 gives 0), elementwise, by table lookup."""
     s = np.clip(np.asarray(s, float), 0.0, S_MAX)
     j = np.clip(np.asarray(j, int), 0, J_MAX)
-    _rows(np.unique(j))
+    if np.isnan(_TABLE[:, 0]).any():  # a comb size not tabulated yet (before warm_up)
+        _rows(np.unique(j))
     pos = s / S_STEP
     i = np.minimum(pos.astype(int), _GRID.size - 2)
     w = pos - i
@@ -93,31 +100,19 @@ def averaged_median(k: int, n_nodes: int = 128) -> tuple[np.ndarray, float]:
     return nodes, float(gammaincinv(k, 0.5) / k)
 
 
-def log10_gamma_sf(a, x) -> np.ndarray:
+def log10_gamma_sf(a, x, per_row: bool = False) -> np.ndarray:
     """log10 Q(a, x), the regularised upper incomplete gamma, without underflow: scipy's value
-    where it is above 1e-280, else the continued fraction of Q (Lentz; x > a there)."""
+    where it is above 1e-280, else the continued fraction of Q (Lentz; x > a there;
+    :func:`.gamma_tail.lentz_product`), iterated until all those elements converged, or, with
+    ``per_row``, those of each row (first axis) of the 2-d broadcast: each row exactly as if alone."""
     a, x = np.broadcast_arrays(np.asarray(a, float), np.asarray(x, float))
     q = gammaincc(a, x)
     out = np.log10(np.maximum(q, 1e-300))
-    tiny = q < 1e-280
+    tiny = q < TAIL
     if np.any(tiny):
         at, xt = a[tiny], x[tiny]
-        b = xt + 1.0 - at
-        c = np.full_like(xt, 1e300)
-        d = 1.0 / b
-        h = d.copy()
-        for i in range(1, 200):
-            an = -i * (i - at)
-            b = b + 2.0
-            d = an * d + b
-            d = np.where(np.abs(d) < 1e-300, 1e-300, d)
-            c = b + an / c
-            c = np.where(np.abs(c) < 1e-300, 1e-300, c)
-            d = 1.0 / d
-            step = d * c
-            h = h * step
-            if np.all(np.abs(step - 1.0) < 1e-12):
-                break
+        counts = tiny.reshape(tiny.shape[0], -1).sum(axis=1) if per_row else [at.size]
+        h = lentz_product(np.ascontiguousarray(at), np.ascontiguousarray(xt), np.r_[0, np.cumsum(counts)])
         out[tiny] = (-xt + at * np.log(xt) - gammaln(at) + np.log(h)) / np.log(10.0)
     return out
 
@@ -128,11 +123,52 @@ def averaged_comb_log10p(s, j, k: int) -> np.ndarray:
     s, j = np.broadcast_arrays(np.asarray(s, float), np.asarray(j, float))
     nodes, med = averaged_median(int(k))
     lq = log10_gamma_sf((j * k)[..., None], (k * np.maximum(s, 0.0) / med)[..., None] * nodes)
-    out = (_logsumexp(lq * np.log(10.0)) - np.log(nodes.size)) / np.log(10.0)
+    out = (logsumexp_rows(lq * np.log(10.0)) - np.log(nodes.size)) / np.log(10.0)
     return np.where(j > 0, np.minimum(out, 0.0), 0.0)
 
 
-def _logsumexp(a: np.ndarray) -> np.ndarray:
+def averaged_comb_log10p_rows(s, j, k: int, rows: np.ndarray) -> np.ndarray:
+    """:func:`averaged_comb_log10p` of 1-d ``s`` and ``j`` at the rows ``rows`` (boolean) alone, bit for bit
+    (NaN at the others): the other rows take part only in the continued fraction's stopping, which waits
+    for every tail element of the call (:func:`log10_gamma_sf`); their tail nodes are found by bisection
+    (Q falls with x, and x with the node), a few evaluations of Q per row instead of one per node."""
+    s, j = np.broadcast_arrays(np.asarray(s, float), np.asarray(j, float))
+    nodes, med = averaged_median(int(k))
+    a = np.broadcast_to((j * k)[:, None], (s.size, nodes.size))
+    x = (k * np.maximum(s, 0.0) / med)[:, None] * nodes
+    q = np.full(x.shape, np.nan)
+    q[rows] = gammaincc(a[rows], x[rows])
+    lq = np.log10(np.maximum(q, 1e-300))
+    tiny = q < TAIL
+    tiny[~rows] = _tail_nodes(a[~rows, 0], x[~rows])
+    if np.any(tiny):
+        at, xt = a[tiny], x[tiny]
+        h = lentz_product(np.ascontiguousarray(at), np.ascontiguousarray(xt), np.array([0, at.size]))
+        wanted = np.broadcast_to(rows[:, None], x.shape)[tiny]
+        at, xt, h = at[wanted], xt[wanted], h[wanted]
+        lq[tiny & rows[:, None]] = (-xt + at * np.log(xt) - gammaln(at) + np.log(h)) / np.log(10.0)
+    out = np.full(s.shape, np.nan)
+    lse = (logsumexp_rows(lq[rows] * np.log(10.0)) - np.log(nodes.size)) / np.log(10.0)
+    out[rows] = np.where(j[rows] > 0, np.minimum(lse, 0.0), 0.0)
+    return out
+
+
+def _tail_nodes(a: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Whether Q(a, x) < :data:`TAIL` at each node of rows of ``x`` (n, nodes; rising along a row) with
+    ``a`` (n,), by bisection for each row's first such node."""
+    n, m = x.shape
+    lo = np.where(gammaincc(a, x[:, -1]) < TAIL, 0, m) if n else np.zeros(0, int)
+    hi = np.where(lo == 0, m - 1, m)
+    while np.any(lo < hi):
+        act = np.flatnonzero(lo < hi)
+        mid = (lo[act] + hi[act]) // 2
+        below = gammaincc(a[act], x[act, mid]) < TAIL
+        hi[act] = np.where(below, mid, hi[act])
+        lo[act] = np.where(below, lo[act], mid + 1)
+    return np.arange(m)[None, :] >= lo[:, None]
+
+
+def logsumexp_rows(a: np.ndarray) -> np.ndarray:
     """ln Σ exp(a) over the last axis of ``a``: scipy.special.logsumexp's arithmetic (the
     maxima taken out of the sum, log1p of the rest), without its per-call overhead (a third of a
     long-horizon window's cost). A row holding NaN (a comb of no terms) gives NaN, silently."""
