@@ -57,6 +57,10 @@ def test_monitor_record_fills_the_message():
     problem = fill_health_message(msgs.HealthIndicators(), monitor.update(
         1480.0, rng.standard_normal(2560), fs, evidence=FaultEvidence(problem="shaft speed unknown")), monitor)
     assert problem.evidence_problem == "shaft speed unknown" and not list(problem.hypotheses)
+    assert not back.speed_changing
+    held = fill_health_message(msgs.HealthIndicators(), monitor.update(
+        1540.0, rng.standard_normal(2560), fs, speed_changing=True), monitor)
+    assert held.speed_changing and held.state == back.state  # scored, held out of the trend
     assert math.isfinite(back.score) and back.moved in monitor.tracker.names
 
 

@@ -37,6 +37,7 @@ def fill_health_message(msg, record, monitor, frame_id: str = ""):
     msg.state = int(trend.state)
     msg.state_since = to_stamp((monitor.tracker.t0 or 0.0) + trend.since)
     msg.learning = bool(trend.learning)
+    msg.speed_changing = bool(record.speed_changing)
     msg.moved = trend.moved
     msg.score = float(trend.score.get(trend.moved, math.nan)) if trend.moved else math.nan
     msg.slope = float(trend.slope.get(trend.moved, math.nan)) if trend.moved else math.nan
