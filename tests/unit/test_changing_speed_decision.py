@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from bearing_common.bearings import load_bearing
 from bearing_common.shaft_angle import SpeedProfile
 from bearing_common.states import FaultState
 from bearing_diagnoser.diagnose_cli import main as diagnose
@@ -150,3 +151,24 @@ def test_bearing_diagnose_tracks_a_changing_speed_from_the_vibration(tmp_path, c
     assert states[-1] == "outer_race" and not {"inner_race", "ball"} & set(states), states
     with pytest.raises(SystemExit, match="2"):
         diagnose([str(path), "--track-speed", "900:2200"])  # wider than an octave
+
+
+@pytest.mark.parametrize("ramp", ["down10", "down20"])
+def test_a_speed_held_after_its_lines_moved_is_withdrawn_on_a_healthy_warped_ramp(hit_record, ramp):
+    """HIT-SM Normal_1200 played along a ramp down (a warped record: its resonances move with the speed
+    too), told its mean speed as a nameplate's: the speed its first second measured is held only while
+    the buffer still shows its lines there. It was held for 4 s while the shaft slowed from 20.9 to
+    19.1 Hz (the ramp smears the full series, and the half-second speed check sees no lines), and
+    BALL was called."""
+    from bearing_recordings.load import load_recording
+    from bearing_recordings.speed_warp import centred_span, warp
+    from benchmarks.speed_ramps import ramp_profiles
+
+    rec = load_recording(hit_record("Normal_1200.mat"), sample_rate=51200.0, rpm=1200.0)
+    profile = ramp_profiles(rec.rpm)[ramp]
+    warped = warp(rec.accel, rec.sample_rate, rec.rpm, profile, *centred_span(profile, rec.rpm, rec.duration))
+    rpm = float(np.mean(warped.shaft_speed)) * 30.0 / np.pi
+    result = diagnose_recording(Recording(warped.accel, warped.sample_rate, rpm, "mat", None, "accel", "warped"),
+                                bearing=load_bearing("6205"))
+    assert not _labels(result) & FAULTS, [s.to_json() for s in result.segments]
+    assert sum(d.diagnosed for d in result.decisions) >= 0.5 * len(result.decisions)  # a verdict, not silence

@@ -34,9 +34,11 @@ not replaced by a provisional one; the speed is re-estimated every window until 
 full buffer. When none is found
 there but a shaft comb is plain within twice the tolerance, that measurement is used and
 said to disagree with the told speed (``speed_source`` "measured"); otherwise the told speed
-stands, with its whole tolerance as uncertainty (a wide slip search); a buffer without
-lines keeps the last measurement. Terms two hypotheses could both match at one speed
-(within the slip search alone: 3·BPFO and 2·BPFI of a 6205) do not count
+stands, with its whole tolerance as uncertainty (a wide slip search). A buffer that does not
+measure the speed again keeps the last measurement only while it still shows two of its shaft
+lines where the measurement put them (:meth:`EvidenceStream._still_shown`): weak lines hold a
+measurement, moved ones (a ramp that smears the full series) withdraw it. Terms two hypotheses
+could both match at one speed (within the slip search alone: 3·BPFO and 2·BPFI of a 6205) do not count
 (:func:`.fault_combs.drop_ambiguous`); a line one hypothesis explains is taken from the
 others before they are tested (explain-away), in the window as in the long horizon.
 
@@ -231,12 +233,23 @@ class EvidenceStream:
             wider = None if wider is None or self._fault_family(wider.hz, hz) else wider
             if wider:
                 self.speed = (wider.hz, wider.sigma, "measured")
-            elif self.speed is None or self.speed[2] not in ("refined", "measured"):
-                self.speed = (hz, tol / 2 * hz, "told")  # (a buffer without lines keeps the last measurement)
+            elif not measured or (refine and not self._still_shown(x, hz, tol)):
+                self.speed = (hz, tol / 2 * hz, "told")
         else:
             found = estimate_speed(x, self.fs, *s.blind_range_hz)
             if found:
                 self.speed = (found.hz, found.sigma, "estimated")
+
+    def _still_shown(self, x: np.ndarray, hz: float, tol: float) -> bool:
+        """Whether buffer ``x`` still shows the held measurement's shaft lines (told rate ``hz``, relative
+        tolerance ``tol``): two of its first harmonics (:func:`.shaft_speed.confirm_speed`) at a rate within
+        3 σ of it. A measurement is held while its lines are weak, never while they have moved: a ramp
+        smears the full series, and a speed held from before it went on being used (HIT-SM Normal_1200
+        along a 20 % ramp: 20.9 Hz held for 4 s while the shaft slowed to 19.1 Hz, called BALL)."""
+        held, sigma, _ = self.speed
+        band = (self.band.low, self.band.high) if self.band is not None else None
+        found = confirm_speed(x, self.fs, hz * (1 - 2 * tol), hz * (1 + 2 * tol), band)
+        return found is not None and abs(found.hz - held) <= 3.0 * np.hypot(found.sigma, sigma)
 
     def _fault_family(self, hz: float, told_hz: float) -> bool:
         """Whether a measured rate ``hz`` that departs from the told one by more than the slip search

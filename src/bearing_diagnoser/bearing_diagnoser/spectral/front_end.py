@@ -45,7 +45,7 @@ accumulates across the change. Window times, the thesis' blocks and onsets are m
 input's samples; the false-alarm budget counts a window's real duration (a faster shaft: more
 windows an hour, each tested at a smaller α); the reported speed is the window's mean.
 Without a measured speed the decision holds one speed (the told one, refined every second from
-the shaft lines, a measurement held while the lines are smeared). So every second (at the first
+the shaft lines, a measurement held while two of its lines still stand where it put them). So every second (at the first
 window ending a second after the last check) the shaft rate is measured on the first and the
 last half second of the last two seconds (:func:`.shaft_speed.estimate_speed`, within twice the
 told tolerance: half a second, so that a ramp of 4 %/s smears the third harmonic of 30 Hz by
@@ -55,8 +55,10 @@ a rate at which the highest comb term moves by more than one frequency bin over 
 1800 rev/min for a 6205, 0.6 %/s at 600 — the windows' combs smear and their speed is stale:
 they are not diagnosed (``speed``, "shaft speed changing") until a check finds one speed again.
 Where the shaft lines are too weak to be measured on half a second, the check cannot see the
-change (the told speed then stands unconfirmed, and no comb is called, or a held measurement is
-used).
+change; but a measurement is held only while the buffer shows its lines where it put them, so the
+told speed then stands unconfirmed, and no comb is called (HIT-SM Normal_1200 warped along a 20 %
+ramp down: a speed measured in the first second was held for 4 s while the shaft slowed by 9 %, and
+BALL was called).
 
 The thesis' blocks of every observer stream that carries a model or a train are measured
 over the same samples (:mod:`bearing_diagnoser.decision.thesis_blocks`). A window whose
