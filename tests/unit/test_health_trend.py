@@ -87,6 +87,17 @@ def test_limits_grow_with_the_rarity_asked_for():
     assert nm.limit_for_rate(0.49, fit, LAM) == 0.0
 
 
+def test_a_long_baseline_has_finite_limits_close_to_the_known_scale():
+    """A baseline of 600 windows (10 min at the node's 1 s health period): the scale quadrature's Γ(α+1)
+    overflowed beyond about 340 and the limits were NaN (the trend raised); a long baseline knows σ_e
+    well, so its limit approaches that of a shorter one from below."""
+    rng = np.random.default_rng(2)
+    long_fit, short_fit = nm.fit_ar1(rng.standard_normal(600)), nm.fit_ar1(rng.standard_normal(60))
+    u_long, u_short = (nm.limit_for_rate(1e-4, f, LAM) for f in (long_fit, short_fit))
+    assert np.isfinite(u_long) and 0.0 < u_long < u_short
+    assert_allclose(nm.crossing_probability(u_long, long_fit, LAM), 1e-4, rtol=1e-3)
+
+
 # ----------------------------------------------------------------------------------------
 # false alarms of the whole detector, baselines estimated
 
