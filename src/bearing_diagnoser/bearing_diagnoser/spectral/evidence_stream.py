@@ -88,7 +88,7 @@ from .fault_combs import (
     untestable,
 )
 from .settings import SpectralSettings, check_resolvable
-from .shaft_speed import confirm_speed, estimate_speed
+from .shaft_speed import SpeedEstimate, confirm_speed, estimate_speed
 
 #: Relative speed uncertainty above which a told speed is unconfirmed: a tachometer's or a rig's
 #: measured speed (2 %, σ = 1 %) is not; a nameplate's (10 %) the vibration has not confirmed is.
@@ -221,8 +221,7 @@ class EvidenceStream:
             if refine and not measured and (found is None or self._fault_family(found.hz, hz)):
                 # any two shaft lines confirm a told speed (provisionally on a short buffer: module docstring);
                 # they never replace a measurement of the full series
-                band = (self.band.low, self.band.high) if self.band is not None else None
-                found = confirm_speed(x, self.fs, hz * (1 - tol), hz * (1 + tol), band)
+                found = self._confirm(x, hz, tol)
                 source = "refined" if x.size >= int(s.buffer_s * self.fs) else "provisional"
             sure = tol / 2 <= UNSURE_SPEED  # a tachometer's speed stands until a full buffer refines it
             if found and not self._fault_family(found.hz, hz) and not (source == "provisional" and sure):
@@ -247,9 +246,14 @@ class EvidenceStream:
         smears the full series, and a speed held from before it went on being used (HIT-SM Normal_1200
         along a 20 % ramp: 20.9 Hz held for 4 s while the shaft slowed to 19.1 Hz, called BALL)."""
         held, sigma, _ = self.speed
-        band = (self.band.low, self.band.high) if self.band is not None else None
-        found = confirm_speed(x, self.fs, hz * (1 - 2 * tol), hz * (1 + 2 * tol), band)
+        found = self._confirm(x, hz, 2 * tol)
         return found is not None and abs(found.hz - held) <= 3.0 * np.hypot(found.sigma, sigma)
+
+    def _confirm(self, x: np.ndarray, hz: float, tol: float) -> SpeedEstimate | None:
+        """:func:`.shaft_speed.confirm_speed` on buffer ``x`` within ``hz`` · (1 ± ``tol``), in the raw
+        spectrum and in the envelope of the current demodulation band (when there is one)."""
+        band = (self.band.low, self.band.high) if self.band is not None else None
+        return confirm_speed(x, self.fs, hz * (1 - tol), hz * (1 + tol), band)
 
     def _fault_family(self, hz: float, told_hz: float) -> bool:
         """Whether a measured rate ``hz`` that departs from the told one by more than the slip search
