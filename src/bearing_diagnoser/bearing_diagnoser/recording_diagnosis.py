@@ -51,7 +51,7 @@ CHUNK_S = 0.01
 #: Chunk length (s) an offline run feeds otherwise. The decision follows sample indices, not chunks:
 #: every window, state and score is the same at any chunk (``tests/unit/test_chunk_sizes.py``; every
 #: run of ``benchmarks/decision_dump.py``), and a long chunk spares the per-chunk passes through the
-#: sessions (checks, states, condition trend: a quarter of the CPU at 0.01 s). Capped at the chunk
+#: sessions (checks, states, condition trend: 30-40 % of the CPU at 0.01 s). Capped at the chunk
 #: check's limit (:data:`~bearing_common.chunk_stream.MAX_CHUNK_SAMPLES`).
 OFFLINE_CHUNK_S = 10.0
 
