@@ -45,6 +45,20 @@ def test_bad_chunks_are_rejected_with_reason(mutate, reason):
     assert stream.counts["rejected"] == 1
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered in reduce:RuntimeWarning",
+                            "ignore:invalid value encountered in reduce:RuntimeWarning")
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_finite_samples_whose_sum_overflows_are_accepted(dtype):
+    """The finite check sums the samples first; a sum that overflows (NumPy warns) is checked sample by
+    sample."""
+    big = np.full(480, np.finfo(dtype).max / 2, dtype=dtype)
+    stream = ChunkStream("vib", sample_rate=FS)
+    assert stream.check(0.0, 0, FS, big).accepted
+    t, i, fs, _ = chunk(1)
+    v = stream.check(t, i, fs, np.where(np.arange(480) == 7, -np.inf, big).astype(dtype))
+    assert not v.accepted and "non-finite samples: 1 NaN/inf of 480" in v.reason
+
+
 def test_out_of_order_and_duplicate_stamps_are_rejected():
     stream = ChunkStream("vib")
     stream.check(*chunk(0))

@@ -3,8 +3,10 @@
 The compiled continued fraction of the gamma tail (:mod:`bearing_diagnoser.spectral.gamma_tail`), the
 onset's runs tested at once (:func:`.fault_combs.recent_run_evidence`), the kept term bins
 (:func:`.fault_combs.term_bins`) and the long horizon's rows left out when they cannot hold the
-smallest p-value (:func:`.fault_combs.smallest_log10p`) promise the very numbers the decision computed
-before; the references below are those computations.
+smallest p-value (:func:`.fault_combs.smallest_log10p`), the running-median normalisation without
+``np.pad``, ``sliding_window_view`` and a ``np.interp`` per row (:func:`.envelope_spectrum.normalise`) and the
+bands' bins sliced rather than gathered (:func:`.envelope_spectrum.band_bins`) promise the very numbers the
+decision computed before; the references below are those computations.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from scipy.special import gammaincc, gammaln
 from bearing_common.bearings import CATALOG
 from bearing_common.states import FaultState
 from bearing_diagnoser.spectral.accumulation import CombGeometry
+from bearing_diagnoser.spectral.envelope_spectrum import N_MED, band_bins, normalise
 from bearing_diagnoser.spectral.fault_combs import (
     SHAFT_MASK_BINS,
     best_scale,
@@ -183,3 +186,45 @@ def test_rows_left_out_cannot_hold_the_smallest_p_value(k, line):
             assert_array_equal(a, b)
     if line >= 3.0:
         assert left_out > 0  # a clear comb leaves the noise rows out
+
+
+def plain_normalise(ses: np.ndarray, stride: int = 8, level: float = np.log(2.0)) -> np.ndarray:
+    """The running-median normalisation as the decision computed it before."""
+    ses = np.atleast_2d(ses)
+    n = ses.shape[-1]
+    padded = np.pad(ses, ((0, 0), (N_MED, N_MED)), mode="reflect" if n > N_MED else "edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * N_MED + 1, axis=-1)[:, ::stride]
+    centres = np.arange(0, n, stride)[: windows.shape[1]]
+    medians = np.partition(windows, N_MED, axis=-1)[..., N_MED]
+    if centres[-1] != n - 1:
+        centres = np.append(centres, n - 1)
+        last = np.partition(padded[:, n - 1:n + 2 * N_MED], N_MED, axis=-1)[:, N_MED]
+        medians = np.concatenate([medians, last[:, None]], axis=1)
+    grid = np.arange(n)
+    med = np.stack([np.interp(grid, centres, row) for row in medians])
+    return level * ses / np.maximum(med, 1e-300)
+
+
+@pytest.mark.parametrize("n", [1, 2, 9, 50, 51, 52, 101, 102, 107, 600, 1001, 4097])
+@pytest.mark.parametrize("stride", [1, 5, 8])
+def test_normalise_matches_the_plain_running_median(n, stride):
+    ses = RNG.exponential(size=(3, n)) * RNG.uniform(0.01, 100.0, size=(3, 1))
+    ses[1, : n // 3] = 0.0  # ties and a zero median
+    for level in (np.log(2.0), 0.93):
+        assert_array_equal(normalise(ses, stride, level), plain_normalise(ses, stride, level))
+    assert_array_equal(normalise(ses[0], stride), plain_normalise(ses[0], stride))
+
+
+def test_band_bins_are_the_gathered_bins():
+    n, fs = 4000, 12000.0
+    X = np.fft.rfft(RNG.normal(size=n))
+    df = fs / n
+    inside = np.array([[600.0, 1800.0], [1500.0, 2700.0], [4800.0, 6000.0]])  # up to Nyquist, no clipping
+    beyond = np.array([[-30.0, 1170.0], [5400.0, 6600.0]])  # below 0 and beyond Nyquist: clipped
+    for bands in (inside, beyond, inside[:1]):
+        first = np.rint(bands[:, 0] / df).astype(int)
+        width = int(np.rint((bands[0, 1] - bands[0, 0]) / df))
+        gathered = X[np.clip(first[:, None] + np.arange(width)[None, :], 0, X.size - 1)]
+        got = band_bins(X, n, fs, bands)
+        assert_array_equal(got, gathered)
+        assert got.flags.c_contiguous and got.dtype == X.dtype

@@ -167,19 +167,19 @@ class Diagnoser:
         if fault_frequency is None or not (math.isfinite(fault_frequency) and fault_frequency > 0):
             raise ValueError("fault_frequency (Hz) must be > 0")
         r = np.asarray(residual, dtype=float)
-        e = np.zeros_like(r) if estimate is None else np.asarray(estimate, dtype=float)
-        u = np.zeros_like(r) if impulse_train is None else np.asarray(impulse_train, dtype=float)
-        if not (r.shape == e.shape == u.shape) or r.ndim != 1:
+        e = None if estimate is None else np.asarray(estimate, dtype=float)
+        u = None if impulse_train is None else np.asarray(impulse_train, dtype=float)
+        if r.ndim != 1 or any(a is not None and a.shape != r.shape for a in (e, u)):
             raise ValueError("residual, estimate and impulse_train must be 1-D and of equal length")
         st = self._streams.get(h)
         if st is None:
             st = self._streams[h] = StreamBlocks(EnergyEnvelope(self._sample_rate, front.envelope_band))
         st.fault_hz = float(fault_frequency)
         st.has_model = st.has_model or (estimate is not None and self.model_set != NONE)
-        st.has_train = st.has_train or (impulse_train is not None and np.any(u != 0.0))
-        y = r + e
+        st.has_train = st.has_train or (u is not None and np.any(u != 0.0))
+        y = r + (0.0 if e is None else e)  # no estimate: ŷ = 0 (r + 0.0, as r + zeros)
         if front.reads_blocks or st.has_model or st.has_train:  # else the blocks are never read
-            st.push(int(first_sample_index), y, r, u)
+            st.push(int(first_sample_index), y, r, np.zeros_like(r) if u is None else u)
         return self._decide(front.push(h, int(first_sample_index), y, self._streams, self.expected, snapshot))
 
     def envelope_view(self):

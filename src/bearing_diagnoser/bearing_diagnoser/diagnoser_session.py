@@ -165,6 +165,7 @@ class DiagnoserSession:
         self.reference = ReferenceSession(values, log) if config is None else None
         self._learn_from: FaultState | None = None  # the stream the reference learns from
         self._health_out: list[HealthRecord] = []
+        self._lines_top: tuple = (None, 0.0)  # ((bearing, rpm), its fault_lines_top) for the condition trend
         self._envelope_taken = None  # the last spectrum handed out by take_envelope
         self.last_health: HealthRecord | None = None
         self.snapshots = False  # whether the last accepted chunk was a snapshot sensor's
@@ -426,7 +427,9 @@ class DiagnoserSession:
         no_evidence = self.decision_problem and f"cannot decide: {self.decision_problem}"
         if not no_evidence and self.speed_unknown:
             no_evidence = SPEED_UNKNOWN
-        records = self.condition.push(stamp, sample_rate, y, verdict.snapshot, fault_lines_top(self.bearing, rpm),
+        if self._lines_top[0] != (self.bearing, rpm):  # (per chunk: computed when the bearing or speed changes)
+            self._lines_top = ((self.bearing, rpm), fault_lines_top(self.bearing, rpm))
+        records = self.condition.push(stamp, sample_rate, y, verdict.snapshot, self._lines_top[1],
                                    verdict.restart, no_evidence)
         if records:
             self._health_out.extend(records)

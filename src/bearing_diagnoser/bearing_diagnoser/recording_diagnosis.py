@@ -29,6 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bearing_common.bearings import CATALOG, DEFAULT_BEARING, Bearing
+from bearing_common.chunk_stream import MAX_CHUNK_SAMPLES
 from bearing_recordings.recording import MEASURED_RPM_TOLERANCE, SPEED_VARIATION, InputError, Recording
 from bearing_recordings.resampling import resample
 
@@ -43,8 +44,16 @@ from .spectral.machine_reference import MachineReference, MachineReferenceError,
 
 LOG = logging.getLogger(__name__)
 
-#: Chunk length (s) fed to the graph, as the simulator node publishes (0.01 s).
+#: Chunk length (s) the simulator node publishes (0.01 s): what an offline run feeds while it tells the
+#: observers a changing speed (chunk by chunk, as the graph's speed topic does).
 CHUNK_S = 0.01
+
+#: Chunk length (s) an offline run feeds otherwise. The decision follows sample indices, not chunks:
+#: every window, state and score is the same at any chunk (``tests/unit/test_chunk_sizes.py``; every
+#: run of ``benchmarks/decision_dump.py``), and a long chunk spares the per-chunk passes through the
+#: sessions (checks, states, condition trend: 30-40 % of the CPU at 0.01 s). Capped at the chunk
+#: check's limit (:data:`~bearing_common.chunk_stream.MAX_CHUNK_SAMPLES`).
+OFFLINE_CHUNK_S = 10.0
 
 METHODS = ("model", "envelope")
 
@@ -133,9 +142,10 @@ def learn_recording_reference(rec: Recording, model_set: str | None = None, rpm:
 
 
 def run_pipeline(pipeline: MonitorPipeline, x: np.ndarray, fs: float, source: str,
-                 chunk_s: float = CHUNK_S) -> list[Decision]:
-    """Feed ``x`` (m/s² at ``fs`` Hz) to ``pipeline`` in chunks of ``chunk_s`` seconds; every window's decision."""
-    chunk = max(1, int(round(chunk_s * fs)))
+                 chunk_s: float = OFFLINE_CHUNK_S) -> list[Decision]:
+    """Feed ``x`` (m/s² at ``fs`` Hz) to ``pipeline`` in chunks of ``chunk_s`` seconds (at most
+    :data:`~bearing_common.chunk_stream.MAX_CHUNK_SAMPLES`); every window's decision."""
+    chunk = min(max(1, int(round(chunk_s * fs))), MAX_CHUNK_SAMPLES)
     for i in range(0, x.size, chunk):
         pipeline.feed(i, fs, x[i:i + chunk], source)
     return pipeline.finish()
@@ -144,7 +154,7 @@ def run_pipeline(pipeline: MonitorPipeline, x: np.ndarray, fs: float, source: st
 def diagnose_recording(rec: Recording, model_set: str | None = None, method: str = "model",
                        rpm: float | None = None, bearing: Bearing | None = None,
                        config: DiagnoserConfig | None = None, keep_streams: bool = False,
-                       chunk_s: float = CHUNK_S, rpm_tolerance: float | None = None,
+                       chunk_s: float | None = None, rpm_tolerance: float | None = None,
                        baseline: Recording | MachineReference | None = None,
                        track_speed: tuple[float, float] | None = None) -> OfflineResult:
     """Diagnose a whole recording offline, exactly as the live graph would.
@@ -168,6 +178,9 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         Decision parameters (default: the model set's).
     keep_streams : bool
         Keep full residual / estimate / train arrays for figures.
+    chunk_s : float, optional
+        Chunk length fed to the sessions (s): default :data:`OFFLINE_CHUNK_S`, :data:`CHUNK_S` when a
+        changing speed is followed (the decisions are the same at any chunk).
     baseline : Recording or MachineReference, optional
         The machine's own healthy reference: a healthy recording of the same machine (learnt by
         :func:`learn_recording_reference` with the same arguments) or a reference learnt before;
@@ -211,6 +224,8 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
                                STREAMS if observed or cfg.front_end.EVERY_STREAM else STREAMS[:1], keep_streams,
                                rpm_tolerance, shaft_speed=series)
     t_cpu = time.process_time()
+    if chunk_s is None:
+        chunk_s = OFFLINE_CHUNK_S if series is None else CHUNK_S
     decisions = run_pipeline(pipeline, x, fs, rec.source, chunk_s)
     cpu = time.process_time() - t_cpu
     problems = [(d.window_start, d.window_end, d.not_diagnosed) for d in decisions if not d.diagnosed]
@@ -243,7 +258,7 @@ def _changing_speed(rec: Recording, fs: float, track: tuple[float, float] | None
 
 def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",
                          config: DiagnoserConfig | None = None, bearing: Bearing | None = None,
-                         chunk_s: float = CHUNK_S,
+                         chunk_s: float = OFFLINE_CHUNK_S,
                          rpm_tolerance: float = MEASURED_RPM_TOLERANCE) -> tuple[list[Segment], list[Decision]]:
     """The decision with the defaults of ``model_set`` on a measurement alone (no observer: y fed
     as both streams' residual, ŷ = 0): the "observer without train, L = 0" front end of

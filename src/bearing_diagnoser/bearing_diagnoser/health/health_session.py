@@ -102,6 +102,7 @@ class HealthSession:
         self._rate: float | None = None
         self._seen_until: float | None = None  # stamp (s) one past the last sample taken
         self._parts: list[np.ndarray] = []  # samples of the window being filled
+        self._held = 0  # how many
         self._window_t: float | None = None  # its first sample's stamp (s)
         self._pending_snapshot = False  # the window being filled is one chunk that may prove a snapshot
         self._decided: list[DecidedWindow] = []  # decided windows not yet matched to a record
@@ -187,7 +188,7 @@ class HealthSession:
         if snapshot:
             if self._pending_snapshot and self._parts:  # auto mode saw the first snapshot as a stream's chunk
                 out += self._score(self._window_t, np.concatenate(self._parts), no_evidence)
-            self._parts, self._window_t, self._pending_snapshot = [], None, False
+            self._parts, self._held, self._window_t, self._pending_snapshot = [], 0, None, False
             out += self._score(stamp, y, no_evidence)
         else:
             out += self._stream(stamp, y, gap, no_evidence)
@@ -198,13 +199,14 @@ class HealthSession:
         if gap or self._window_t is None:  # a pause, or the stream goes on after a snapshot scored whole
             if gap and self._parts:
                 self.counts["broken windows"] += 1
-            self._parts, self._window_t = [], stamp
+            self._parts, self._held, self._window_t = [], 0, stamp
             self._pending_snapshot = gap  # a chunk alone after a pause, until another continues it
         else:
             self._pending_snapshot = False
         self._parts.append(y)
+        self._held += y.size
+        held = self._held
         n = int(round(self.settings.period * self._rate))
-        held = sum(p.size for p in self._parts)
         out = []
         if held < n:
             return out
@@ -215,6 +217,7 @@ class HealthSession:
             self._window_t += n / self._rate
             k += n
         self._parts = [x[k:]] if k < x.size else []
+        self._held = x.size - k
         self._pending_snapshot = False
         return out
 
@@ -244,5 +247,5 @@ class HealthSession:
         self._log("info", f"{why}; the condition trend begins again (a new baseline)")
         self.monitor = None
         self._seen_until = None
-        self._parts, self._window_t, self._pending_snapshot = [], None, False
+        self._parts, self._held, self._window_t, self._pending_snapshot = [], 0, None, False
         self._decided = []

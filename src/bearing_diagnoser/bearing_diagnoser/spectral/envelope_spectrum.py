@@ -57,6 +57,21 @@ def window_spectrum(x: np.ndarray, prewhiten: bool = True) -> np.ndarray:
     return unit_magnitude(X) if prewhiten else X
 
 
+def band_bins(X: np.ndarray, n: int, fs: float, bands: np.ndarray) -> np.ndarray:
+    """The bins of each band of ``bands`` ((m, 2) (f_lo, f_hi) in Hz, one width, at least 8 bins) in
+    the window spectrum ``X`` (rfft of ``n`` samples), one row each (m, width): from the bin of f_lo on,
+    indices beyond X's ends clipped to them. Rows inside X are sliced (a copy each), not gathered."""
+    df_x = fs / n
+    first = np.rint(bands[:, 0] / df_x).astype(int)
+    width = max(8, int(np.rint((bands[0, 1] - bands[0, 0]) / df_x)))
+    if first.min() < 0 or first.max() + width > X.size:
+        return X[np.clip(first[:, None] + np.arange(width)[None, :], 0, X.size - 1)]
+    out = np.empty((first.size, width), dtype=X.dtype)
+    for row, k in enumerate(first):
+        out[row] = X[k:k + width]
+    return out
+
+
 def band_ses(X: np.ndarray, n: int, fs: float, bands: np.ndarray, f_max: float | None = None):
     """SES of bands of equal width from one window spectrum ``X`` (rfft of ``n`` samples).
 
@@ -66,10 +81,8 @@ def band_ses(X: np.ndarray, n: int, fs: float, bands: np.ndarray, f_max: float |
     """
     bands = np.atleast_2d(bands)
     df_x = fs / n
-    k1 = np.rint(bands[:, 0] / df_x).astype(int)
-    width = max(8, int(np.rint((bands[0, 1] - bands[0, 0]) / df_x)))
-    idx = np.clip(k1[:, None] + np.arange(width)[None, :], 0, X.size - 1)
-    env = np.abs(np.fft.ifft(X[idx], axis=1)) ** 2
+    env = np.abs(np.fft.ifft(band_bins(X, n, fs, bands), axis=1)) ** 2
+    width = env.shape[1]
     env -= env.mean(axis=1, keepdims=True)
     spectrum = np.fft.rfft(env * hann(width), axis=1)
     if f_max is not None:  # cut before squaring: the bins dropped are not worth their magnitude
@@ -80,11 +93,7 @@ def band_ses(X: np.ndarray, n: int, fs: float, bands: np.ndarray, f_max: float |
 def band_kurtosis(X: np.ndarray, n: int, fs: float, bands: np.ndarray) -> np.ndarray:
     """Spectral kurtosis of each band's complex envelope, <|c|⁴>/<|c|²>² − 2 (0 for Gaussian noise;
     the kurtogram's criterion, Antoni 2007), from one window spectrum as in :func:`band_ses`."""
-    bands = np.atleast_2d(bands)
-    df_x = fs / n
-    k1 = np.rint(bands[:, 0] / df_x).astype(int)
-    width = max(8, int(np.rint((bands[0, 1] - bands[0, 0]) / df_x)))
-    env = np.abs(np.fft.ifft(X[np.clip(k1[:, None] + np.arange(width)[None, :], 0, X.size - 1)], axis=1)) ** 2
+    env = np.abs(np.fft.ifft(band_bins(X, n, fs, np.atleast_2d(bands)), axis=1)) ** 2
     mean = env.mean(axis=1)
     return (env ** 2).mean(axis=1) / np.maximum(mean, 1e-300) ** 2 - 2.0
 
@@ -100,17 +109,41 @@ def normalise(ses: np.ndarray, stride: int = 8, level: float = np.log(2.0)) -> n
     bins, the same law as the exact running median) and interpolated linearly. A median
     of 101 finite values is their 51st order statistic: ``np.partition`` at that index
     alone finds it (``np.median`` also partitions at the end to look for NaN, 8x the cost).
+    The ends are padded by reflection (:func:`_reflect`), the interpolation is ``np.interp``'s
+    for every row at once (:func:`_interpolate`).
     """
     ses = np.atleast_2d(ses)
     n = ses.shape[-1]
-    padded = np.pad(ses, ((0, 0), (N_MED, N_MED)), mode="reflect" if n > N_MED else "edge")
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * N_MED + 1, axis=-1)[:, ::stride]
-    centres = np.arange(0, n, stride)[: windows.shape[1]]
+    padded = _reflect(ses) if n > N_MED else np.pad(ses, ((0, 0), (N_MED, N_MED)), mode="edge")
+    count = (n - 1) // stride + 1  # the centres 0, stride, ... below n
+    s0, s1 = padded.strides
+    windows = np.lib.stride_tricks.as_strided(padded, (padded.shape[0], count, 2 * N_MED + 1),
+                                              (s0, stride * s1, s1), writeable=False)
+    centres = np.arange(0, n, stride)
     medians = np.partition(windows, N_MED, axis=-1)[..., N_MED]
     if centres[-1] != n - 1:
         centres = np.append(centres, n - 1)
         last = np.partition(padded[:, n - 1:n + 2 * N_MED], N_MED, axis=-1)[:, N_MED]
         medians = np.concatenate([medians, last[:, None]], axis=1)
-    grid = np.arange(n)
-    med = np.stack([np.interp(grid, centres, row) for row in medians])
-    return level * ses / np.maximum(med, 1e-300)
+    return level * ses / np.maximum(_interpolate(n, centres, medians), 1e-300)
+
+
+def _reflect(ses: np.ndarray) -> np.ndarray:
+    """``np.pad(ses, ((0, 0), (N_MED, N_MED)), mode="reflect")`` (more than N_MED bins), without its
+    general machinery."""
+    return np.concatenate([ses[:, N_MED:0:-1], ses, ses[:, -2:-N_MED - 2:-1]], axis=1)
+
+
+def _interpolate(n: int, centres: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``np.interp(np.arange(n), centres, row)`` for every row of ``values`` at once, with its very
+    arithmetic: slope·(x − x_j) + y_j between the centres x_j < x_{j+1}, y_j at a centre (the
+    centres increase from 0 to n − 1; the values are finite)."""
+    x = np.arange(n, dtype=float)
+    xp = centres.astype(float)
+    if xp.size == 1:
+        return np.repeat(values, n, axis=1)
+    j = np.minimum(np.searchsorted(xp, x, side="right") - 1, xp.size - 2)
+    slopes = (values[:, 1:] - values[:, :-1]) / (xp[1:] - xp[:-1])
+    out = slopes[:, j] * (x - xp[j]) + values[:, j]
+    out[:, centres] = values
+    return out
