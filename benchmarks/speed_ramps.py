@@ -16,7 +16,9 @@ record's own speed for a warped record), and a run-up goes from 900 to 1800 rev/
 * **Simulated** (:func:`simulated_case`): the 29-DOF model along the profile, noise-free or with
   sensor noise (4.5e-3 (m/s²)/√Hz), at 12 kHz.
 * **Warped** (:func:`warped_case`): each development recording of ``shared_data.yaml`` (CWRU,
-  MFPT, HIT-SM; healthy and faulty) played along the profile, :mod:`bearing_recordings.speed_warp`.
+  MFPT, HIT-SM; healthy and faulty) played along the profile, :mod:`bearing_recordings.speed_warp`;
+  its ``shaft_speed`` is the profile times the record's own shaft speed (:func:`own_speed`), not
+  times its stated one, from which the shaft's lines depart.
   Unlike a real ramp, the resonances (and electrical lines) move with the speed too, and the
   impacts keep their constant-speed strength; results on them test the speed handling, not the
   physics of a run-up. A record shorter than the profile needs covers the middle of it (the
@@ -93,18 +95,35 @@ def simulated_case(state: FaultState, profile_name: str, noise: float = 0.0, sec
                 d["truth"], "simulator", profile)
 
 
-def warped_case(record, profile_name: str) -> Case:
-    """A manifest recording (``accuracy.LabelledRecording``) played along ``ramp_profiles(its rpm)[profile_name]``."""
+def warped_case(record, profile_name: str, own: np.ndarray | None = None) -> Case:
+    """A manifest recording (``accuracy.LabelledRecording``) played along ``ramp_profiles(its rpm)[profile_name]``;
+    its tachometer the profile times ``own``, the record's own shaft speed per sample (:func:`own_speed`), or
+    times its stated speed when None."""
     rec = record.load()
     if rec.rpm is None:
         raise ValueError(f"{record.name}: the recording states no speed")
     profile = ramp_profiles(rec.rpm)[profile_name]
     start, end = centred_span(profile, rec.rpm, rec.duration)
-    w = warp(rec.accel, rec.sample_rate, rec.rpm, profile, start, end)
+    w = warp(rec.accel, rec.sample_rate, rec.rpm, profile, start, end, own)
     shifted = SpeedProfile(profile.times - start, profile.omegas)  # the case's time starts at 0
     name = f"{record.dataset}_{record.name}_{profile_name}".replace(" ", "_").lower()
     return Case(name, w.accel, w.sample_rate, w.shaft_speed, np.full(w.accel.size, int(record.truth)),
                 rec.source, shifted, WARP_NOTE)
+
+
+#: Largest relative change per second of a constant-speed recording's own shaft speed (1/s): the
+#: tracker's path may follow a slow wander, not jump between line families (:func:`own_speed`).
+OWN_MAX_RATE = 0.01
+
+
+def own_speed(rec) -> np.ndarray:
+    """A constant-speed recording's own shaft speed per sample (rad/s), as a tachometer on its shaft would
+    read it: tracked from its vibration (:func:`bearing_diagnoser.order_tracking.track_speed`) within ±5 %
+    of its stated speed, changing by at most :data:`OWN_MAX_RATE` per second. A data set states one nominal
+    speed; the shaft's lines sit off it (HIT-SM Normal_900 by 1.2 %, MFPT by 0.6 %) and wander about
+    their mean (CWRU 097 and 105: 5th-95th percentile ±0.15 %, over a few tenths of a second)."""
+    from bearing_diagnoser.order_tracking import track_speed
+    return track_speed(rec.accel, rec.sample_rate, 0.95 * rec.rpm, 1.05 * rec.rpm, max_rate=OWN_MAX_RATE).speed
 
 
 def development_records(manifest=MANIFEST) -> list:
@@ -139,9 +158,14 @@ def main(argv=None) -> int:
         if not records:
             print(f"speed_ramps: no development recordings found beside the repository ({MANIFEST})", file=sys.stderr)
         for record in records:
+            try:
+                own = own_speed(record.load())
+            except ValueError as exc:
+                print(f"speed_ramps: skipped {record.name}: {exc}", file=sys.stderr)
+                continue
             for name in names:
                 try:
-                    path = warped_case(record, name).save(out)
+                    path = warped_case(record, name, own).save(out)
                 except ValueError as exc:
                     print(f"speed_ramps: skipped {record.name} {name}: {exc}", file=sys.stderr)
                     continue

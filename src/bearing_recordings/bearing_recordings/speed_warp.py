@@ -3,7 +3,13 @@
 A record taken at the shaft speed ω₀ is a function of the shaft angle φ = ω₀·t. Played
 back along a profile ω(t) with angle Φ(t) = ∫ω dt it becomes y(t) = x(Φ(t)/ω₀): the
 shaft lines and the fault combs follow the profile exactly as on a machine changing speed,
-and the profile's ω(t) is the exact tachometer of the result.
+and the profile's ω(t) is the exact tachometer of the result when the record's shaft held ω₀.
+
+A real shaft does not hold its speed exactly: the CWRU shafts wander by ±0.15 % within a
+second about their mean, which itself differs from the label. Given the record's own shaft
+speed ω_r(τ) per sample (measured, e.g. by the tacho-less tracker on the constant-speed
+record), the result's shaft angle is the record's angle at τ(t) = (Φ(t) − Φ(start))/ω₀, so
+its tachometer is ω(t)/ω₀ · ω_r(τ(t)): what a tachometer on that shaft would have read.
 
 **Unlike a real ramp**, everything in the record moves with the speed: the structural
 resonances (and any electrical line such as CWRU's 60 Hz mains, which becomes an order)
@@ -41,10 +47,12 @@ class WarpedSignal:
 
 
 def warp(x, sample_rate: float, rpm: float, profile: SpeedProfile, start: float = 0.0,
-         end: float | None = None) -> WarpedSignal:
+         end: float | None = None, own_speed=None) -> WarpedSignal:
     """Record ``x`` (taken at ``rpm`` rev/min, ``sample_rate`` Hz) played along ``profile`` from
     profile time ``start`` to ``end`` s (default: the profile's last knot), or until the record
-    runs out, whichever is first. Raises ValueError when the record is too short for one sample.
+    runs out, whichever is first. ``own_speed``: the record's shaft speed per sample (rad/s, as
+    long as ``x``; module docstring), whose change the tachometer then carries; None: ``rpm`` held.
+    Raises ValueError when the record is too short for one sample.
     """
     x = np.asarray(x, dtype=float)
     fs, w0 = float(sample_rate), float(rpm) * RPM_TO_RAD_S
@@ -60,7 +68,13 @@ def warp(x, sample_rate: float, rpm: float, profile: SpeedProfile, start: float 
     tau = np.minimum(tau, (x.size - 1) / fs)
     ratio = profile.omega(t) / w0
     cutoff = np.minimum(0.5 * fs, fs / (2.2 * ratio))
-    return WarpedSignal(sample_at(x, fs, tau, cutoff), profile.omega(t), fs, start)
+    speed = profile.omega(t)
+    if own_speed is not None:
+        own = np.asarray(own_speed, dtype=float)
+        if own.shape != x.shape:
+            raise ValueError(f"the record's own speed needs one value per sample ({x.size}), got {own.shape}")
+        speed = speed / w0 * np.interp(tau, np.arange(x.size) / fs, own)
+    return WarpedSignal(sample_at(x, fs, tau, cutoff), speed, fs, start)
 
 
 def centred_span(profile: SpeedProfile, rpm: float, record_seconds: float, start: float = 0.0,
