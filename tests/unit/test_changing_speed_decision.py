@@ -5,6 +5,7 @@ Signals: :mod:`benchmarks.synthetic_ramps` (the 6205 at 12 kHz, shaft lines and 
 follow the shaft angle, a resonance fixed in Hz). Ramps of ±20 % and ±40 % of 1800 rev/min over 10 s.
 """
 
+import argparse
 import json
 import math
 
@@ -14,6 +15,7 @@ import pytest
 from bearing_common.bearings import load_bearing
 from bearing_common.shaft_angle import SpeedProfile
 from bearing_common.states import FaultState
+from bearing_diagnoser.diagnose_cli import _speed_range
 from bearing_diagnoser.diagnose_cli import main as diagnose
 from bearing_diagnoser.diagnoser_node_config import PARAMETERS
 from bearing_diagnoser.diagnoser_session import DiagnoserSession
@@ -143,14 +145,23 @@ def test_bearing_diagnose_tracks_a_changing_speed_from_the_vibration(tmp_path, c
     x, _ = ramp_signal(UP20, 10.0, FAULT)
     path = tmp_path / "ramp.npz"
     np.savez(path, accel=x, sample_rate=RATE)  # no speed: neither a number nor a series
-    rc = diagnose([str(path), "--track-speed", "1500:2200", "--bearing", "6205", "--model-set", "none", "--json"])
+    rc = diagnose([str(path), "--track-speed", "1500:2200:5", "--bearing", "6205", "--model-set", "none", "--json"])
     out = capsys.readouterr()
     assert rc == 0, out.err
-    assert "tracked from the vibration" in out.err and "shaft-angle domain" in out.err
+    assert "tracked from the vibration within 1500-2200 rpm, changing by at most 5 %/s" in out.err
+    assert "shaft-angle domain" in out.err
     states = [json.loads(line)["state"] for line in out.out.splitlines()]
     assert states[-1] == "outer_race" and not {"inner_race", "ball"} & set(states), states
     with pytest.raises(SystemExit, match="2"):
         diagnose([str(path), "--track-speed", "900:2200"])  # wider than an octave
+
+
+def test_track_speed_takes_a_range_and_the_largest_rate_of_change():
+    assert _speed_range("1500:2200") == (1500.0, 2200.0, 0.15)  # the tracker's default, 15 %/s
+    assert _speed_range("1500:2200:2.5") == (1500.0, 2200.0, 0.025)
+    for bad in ("1500", "1500:2200:0", "1500:2200:x", "1500:2200:5:1", "2200:1500", "900:2200"):
+        with pytest.raises(argparse.ArgumentTypeError, match="LO:HI"):
+            _speed_range(bad)
 
 
 @pytest.mark.parametrize("ramp", ["up20", "down20"])

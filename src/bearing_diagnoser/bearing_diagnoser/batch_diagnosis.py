@@ -59,7 +59,7 @@ class FileOptions:
     speed_channel: str | None = None
     speed_units: str | None = None
     pulses_per_rev: int = 1
-    track_speed: tuple[float, float] | None = None
+    track_speed: tuple[float, float, float] | None = None  # rev/min, rev/min, 1/s
     bearing: Bearing | None = None
     model_set: str | None = None
     method: str = "model"

@@ -87,9 +87,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="units of --speed-channel; pulses: a tachometer signal (edges detected)")
     p.add_argument("--pulses-per-rev", type=int, default=1, metavar="N",
                    help="tachometer pulses per shaft revolution of --speed-units pulses (default 1)")
-    p.add_argument("--track-speed", metavar="LO:HI", type=_speed_range,
-                   help="no measured speed, but the speed changes within LO-HI rev/min (narrower than an octave): "
-                        "track it from the vibration (the shaft's harmonics) and follow it (docs/changing-speed.md)")
+    p.add_argument("--track-speed", metavar="LO:HI[:RATE]", type=_speed_range,
+                   help="no measured speed, but the speed changes within LO-HI rev/min (narrower than an octave), "
+                        "by at most RATE %% per second (default 15: a run-up from half speed in 10 s; a drive's "
+                        "ramp time gives it): track it from the vibration (the shaft's harmonics) and follow it "
+                        "(docs/changing-speed.md)")
     p.add_argument("--model-set", help="sim_48k, sim_12k, cwru_de_6205 or none (default: from the input)")
     p.add_argument("--method", choices=("model", "envelope"), default="model",
                    help="model: observers + envelope-spectrum decision (default); envelope: textbook reference")
@@ -119,17 +121,19 @@ def _jobs(text: str) -> int:
     return n
 
 
-def _speed_range(text: str) -> tuple[float, float]:
-    """``LO:HI`` rev/min, 0 < LO < HI < 2·LO (narrower than an octave: the tracker could settle on half or
-    twice the speed otherwise)."""
-    lo, sep, hi = text.partition(":")
+def _speed_range(text: str) -> tuple[float, float, float]:
+    """``LO:HI[:RATE]``: rev/min with 0 < LO < HI < 2·LO (narrower than an octave: the tracker could settle
+    on half or twice the speed otherwise), and the largest speed change RATE in % per second (default
+    15); returned as (LO, HI, RATE / 100)."""
+    parts = text.split(":")
     try:
-        lo, hi = float(lo), float(hi)
+        lo, hi, rate = (float(v) for v in parts + ["15"] * (3 - len(parts)))
     except ValueError:
-        lo = hi = -1.0
-    if not sep or not 0.0 < lo < hi < 2.0 * lo:
-        raise argparse.ArgumentTypeError(f"expected LO:HI rev/min with 0 < LO < HI < 2 LO, got {text!r}")
-    return lo, hi
+        lo = hi = rate = -1.0
+    if not 2 <= len(parts) <= 3 or not (0.0 < lo < hi < 2.0 * lo and 0.0 < rate <= 100.0):
+        raise argparse.ArgumentTypeError(f"expected LO:HI[:RATE] with 0 < LO < HI < 2 LO rev/min and 0 < RATE <= 100 "
+                                         f"%/s, got {text!r}")
+    return lo, hi, rate / 100.0
 
 
 def _options(args):

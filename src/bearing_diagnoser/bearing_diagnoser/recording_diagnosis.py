@@ -156,7 +156,7 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
                        config: DiagnoserConfig | None = None, keep_streams: bool = False,
                        chunk_s: float | None = None, rpm_tolerance: float | None = None,
                        baseline: Recording | MachineReference | None = None,
-                       track_speed: tuple[float, float] | None = None) -> OfflineResult:
+                       track_speed: tuple[float, float, float] | None = None) -> OfflineResult:
     """Diagnose a whole recording offline, exactly as the live graph would.
 
     Parameters
@@ -185,9 +185,10 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         The machine's own healthy reference: a healthy recording of the same machine (learnt by
         :func:`learn_recording_reference` with the same arguments) or a reference learnt before;
         None: the blind decision. The textbook method takes none.
-    track_speed : (lo, hi) rev/min, optional
-        For a recording without a measured speed whose speed changes within that range (narrower
-        than an octave): the speed per sample tracked from the vibration
+    track_speed : (lo, hi, rate), optional
+        For a recording without a measured speed whose speed changes within lo-hi rev/min (narrower
+        than an octave) by at most ``rate`` (relative change per second): the speed per sample tracked
+        from the vibration
         (:func:`.order_tracking.track_speed`, its accuracy there), then decided as a measured one.
 
     Raises InputError (one line) only when the recording cannot be analysed at all, whatever its
@@ -234,18 +235,19 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
                          bearing, baseline.describe() if baseline is not None else "")
 
 
-def _changing_speed(rec: Recording, fs: float, track: tuple[float, float] | None) -> tuple[np.ndarray | None,
-                                                                                          float | None]:
-    """(the recording's speed per sample at ``fs`` Hz (rad/s) when it changes (measured, or tracked within
-    ``track`` rev/min when none is measured), None when it holds one speed; the tracked mean speed (rev/min),
-    None when none was tracked)."""
+def _changing_speed(rec: Recording, fs: float, track: tuple[float, float, float] | None
+                    ) -> tuple[np.ndarray | None, float | None]:
+    """(the recording's speed per sample at ``fs`` Hz (rad/s) when it changes (measured, or tracked as
+    ``track`` = (lo, hi rev/min, largest change 1/s) says when none is measured), None when it holds one
+    speed; the tracked mean speed (rev/min), None when none was tracked)."""
     w, tracked = rec.shaft_speed, None
     if w is None and track is not None:
         from .order_tracking import track_speed
-        w = track_speed(rec.accel, rec.sample_rate, *track).speed
+        lo, hi, rate = track
+        w = track_speed(rec.accel, rec.sample_rate, lo, hi, max_rate=rate).speed
         spread, tracked = float((w.max() - w.min()) / w.mean()), float(np.mean(w)) * 30.0 / np.pi
-        LOG.info("shaft speed tracked from the vibration within %g-%g rpm: %.0f to %.0f rpm", *track,
-                 w.min() * 30.0 / np.pi, w.max() * 30.0 / np.pi)
+        LOG.info("shaft speed tracked from the vibration within %g-%g rpm, changing by at most %g %%/s: %.0f to "
+                 "%.0f rpm", lo, hi, 100.0 * rate, w.min() * 30.0 / np.pi, w.max() * 30.0 / np.pi)
     else:
         spread = rec.speed_spread
     if w is None or spread <= SPEED_VARIATION:
