@@ -102,7 +102,7 @@ class HealthSession:
         self._rate: float | None = None
         self._seen_until: float | None = None  # stamp (s) one past the last sample taken
         self._parts: list[np.ndarray] = []  # samples of the window being filled
-        self._held = 0  # how many
+        self._held = 0  # how many samples they hold (counted, not summed per chunk)
         self._window_t: float | None = None  # its first sample's stamp (s)
         self._pending_snapshot = False  # the window being filled is one chunk that may prove a snapshot
         self._decided: list[DecidedWindow] = []  # decided windows not yet matched to a record
