@@ -4,9 +4,11 @@ The compiled continued fraction of the gamma tail (:mod:`bearing_diagnoser.spect
 onset's runs tested at once (:func:`.fault_combs.recent_run_evidence`), the kept term bins
 (:func:`.fault_combs.term_bins`) and the long horizon's rows left out when they cannot hold the
 smallest p-value (:func:`.fault_combs.smallest_log10p`), the running-median normalisation without
-``np.pad``, ``sliding_window_view`` and a ``np.interp`` per row (:func:`.envelope_spectrum.normalise`) and the
-bands' bins sliced rather than gathered (:func:`.envelope_spectrum.band_bins`) promise the very numbers the
-decision computed before; the references below are those computations.
+``np.pad``, ``sliding_window_view``, ``np.partition`` and a ``np.interp`` per row (:func:`.envelope_spectrum.normalise`,
+compiled in :mod:`bearing_diagnoser.spectral.running_median`), the bands' bins sliced rather than gathered
+(:func:`.envelope_spectrum.band_bins`) and the compiled reads of the single-window p-value table
+(:mod:`bearing_diagnoser.spectral.comb_table`) promise the very numbers the decision computed before; the
+references below are those computations.
 """
 
 from __future__ import annotations
@@ -33,9 +35,14 @@ from bearing_diagnoser.spectral.fault_combs import (
     term_bins,
 )
 from bearing_diagnoser.spectral.significance import (
+    _TABLE,
+    J_MAX,
+    S_MAX,
+    S_STEP,
     averaged_comb_log10p,
     averaged_comb_log10p_rows,
     averaged_median,
+    comb_log10p,
     log10_gamma_sf,
 )
 
@@ -210,6 +217,7 @@ def plain_normalise(ses: np.ndarray, stride: int = 8, level: float = np.log(2.0)
 def test_normalise_matches_the_plain_running_median(n, stride):
     ses = RNG.exponential(size=(3, n)) * RNG.uniform(0.01, 100.0, size=(3, 1))
     ses[1, : n // 3] = 0.0  # ties and a zero median
+    ses[2] = np.round(ses[2] / ses[2].mean() * 4.0)  # a few levels: ties everywhere
     for level in (np.log(2.0), 0.93):
         assert_array_equal(normalise(ses, stride, level), plain_normalise(ses, stride, level))
     assert_array_equal(normalise(ses[0], stride), plain_normalise(ses[0], stride))
@@ -228,3 +236,41 @@ def test_band_bins_are_the_gathered_bins():
         got = band_bins(X, n, fs, bands)
         assert_array_equal(got, gathered)
         assert got.flags.c_contiguous and got.dtype == X.dtype
+
+
+def plain_comb_log10p(s, j) -> np.ndarray:
+    """The single-window table read as the decision computed it before, in NumPy."""
+    s = np.clip(np.asarray(s, float), 0.0, S_MAX)
+    j = np.clip(np.asarray(j, int), 0, J_MAX)
+    pos = s / S_STEP
+    i = np.minimum(pos.astype(int), _TABLE.shape[1] - 2)
+    w = pos - i
+    return _TABLE[j, i] * (1 - w) + _TABLE[j, i + 1] * w
+
+
+def plain_best_scale(s, j, starts) -> np.ndarray:
+    """:func:`.fault_combs.best_scale` of single windows as the decision computed it before."""
+    score = plain_comb_log10p(s, j[None, :])
+    starts = np.asarray(starts, int)
+    low = np.minimum.reduceat(score, starts, axis=1)
+    sizes = np.diff(np.r_[starts, score.shape[1]])
+    at_low = score == np.repeat(low, sizes, axis=1)
+    return np.minimum.reduceat(np.where(at_low, np.arange(score.shape[1]), score.shape[1]), starts, axis=1)
+
+
+def test_table_reads_match_the_numpy_lookup():
+    s = np.r_[RNG.uniform(-5.0, S_MAX + 50.0, 2000), 0.0, S_MAX, S_MAX - S_STEP / 3, 12.35, -0.0]
+    j = RNG.integers(-1, J_MAX + 3, s.size)
+    assert_array_equal(comb_log10p(s, j), plain_comb_log10p(s, j))
+    grid = s.reshape(1, -1)[:, :1000].reshape(40, 25)
+    assert_array_equal(comb_log10p(grid, j[:25][None, :]), plain_comb_log10p(grid, j[:25][None, :]))
+    assert comb_log10p(3.7, 2) == plain_comb_log10p(3.7, 2)
+
+
+@pytest.mark.parametrize("starts", [(0,), (0, 7, 8, 30)])
+def test_best_scales_of_single_windows_match_the_numpy_search(starts):
+    s = np.round(RNG.uniform(0.0, 40.0, (25, 41)), 0)  # whole values: ties between scales
+    j = RNG.integers(0, 10, 41)
+    assert_array_equal(best_scale(s, j, 1, starts), plain_best_scale(s, j, starts))
+    empty = (0, 7, 7, 30)  # a run without scales: the NumPy search's own rule
+    assert_array_equal(best_scale(s, j, 1, empty), plain_best_scale(s, j, empty))

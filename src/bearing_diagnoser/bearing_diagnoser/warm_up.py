@@ -17,12 +17,14 @@ from .decision.thesis_blocks import _train_correlation
 from .fold.folding import _explain_away, _impact_phase_mask, cfar_fold, fold_peakiness
 from .fold.scoring import all_finite, window_sums
 from .spectral import significance
+from .spectral.envelope_spectrum import normalise
 
 
 def warm_up() -> None:
     """Compile or load every kernel and fill the p-value tables (see the module docstring)."""
     significance.warm_up()
     z = np.zeros(16)
+    normalise(z[None, :])
     sos_filter(np.array([[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]]), np.zeros((1, 2)), z, np.zeros(16))
     block_sums(z, z, z, z, 4, np.zeros((7, 4)))
     block_sums(z, z, z, z, 4, np.zeros((7, 8))[:, 4:])  # into a stream's block store (strided)

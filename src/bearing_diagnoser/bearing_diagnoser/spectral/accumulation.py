@@ -170,9 +170,9 @@ class Accumulation:
         g = self.geometry
         best = None
         for spectra, index in rows:
+            held = np.concatenate([np.ravel(exclude), g.known(spectra, self.df, self.windows)])
             lp, rho, s, j = comb_evidence(spectra, self.df, g.fr, {h: g.terms[h]}, g.rho, self.mask_shaft, n_bands,
-                                          self.windows, np.r_[exclude, g.known(spectra, self.df, self.windows)],
-                                          prune=True)[h]
+                                          self.windows, held, prune=True)[h]
             r = int(np.argmin(lp))
             if best is None or lp[r] < best.log10p:
                 i, row = index[r]

@@ -25,11 +25,13 @@ from functools import lru_cache
 
 import numpy as np
 
+from .running_median import median_line
+
 #: Half-width (bins) of the running median that normalises the SES.
 N_MED = 50
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=128)
 def hanning(n: int) -> np.ndarray:
     """``np.hanning(n)``, read-only and cached (the speed and band buffers reuse a few lengths)."""
     w = np.hanning(n)
@@ -37,7 +39,7 @@ def hanning(n: int) -> np.ndarray:
     return w
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=128)
 def hann(n: int) -> np.ndarray:
     """Hann taper of ``n`` points without its zero end points (read-only, cached)."""
     w = np.hanning(n + 2)[1:-1]
@@ -106,44 +108,19 @@ def normalise(ses: np.ndarray, stride: int = 8, level: float = np.log(2.0)) -> n
     :func:`.significance.averaged_median`).
 
     The median is evaluated every ``stride`` bins (each a median of 101 neighbouring
-    bins, the same law as the exact running median) and interpolated linearly. A median
-    of 101 finite values is their 51st order statistic: ``np.partition`` at that index
-    alone finds it (``np.median`` also partitions at the end to look for NaN, 8x the cost).
-    The ends are padded by reflection (:func:`_reflect`), the interpolation is ``np.interp``'s
-    for every row at once (:func:`_interpolate`).
+    bins, the same law as the exact running median) and interpolated linearly, by
+    :func:`.running_median.median_line` (compiled, sliding a sorted window: the values
+    ``np.partition`` and ``np.interp`` gave, bit for bit). The ends are padded by reflection
+    (:func:`_reflect`).
     """
     ses = np.atleast_2d(ses)
     n = ses.shape[-1]
     padded = _reflect(ses) if n > N_MED else np.pad(ses, ((0, 0), (N_MED, N_MED)), mode="edge")
-    count = (n - 1) // stride + 1  # the centres 0, stride, ... below n
-    s0, s1 = padded.strides
-    windows = np.lib.stride_tricks.as_strided(padded, (padded.shape[0], count, 2 * N_MED + 1),
-                                              (s0, stride * s1, s1), writeable=False)
-    centres = np.arange(0, n, stride)
-    medians = np.partition(windows, N_MED, axis=-1)[..., N_MED]
-    if centres[-1] != n - 1:
-        centres = np.append(centres, n - 1)
-        last = np.partition(padded[:, n - 1:n + 2 * N_MED], N_MED, axis=-1)[:, N_MED]
-        medians = np.concatenate([medians, last[:, None]], axis=1)
-    return level * ses / np.maximum(_interpolate(n, centres, medians), 1e-300)
+    line = median_line(np.ascontiguousarray(padded, dtype=float), n, stride, N_MED)
+    return level * ses / np.maximum(line, 1e-300)
 
 
 def _reflect(ses: np.ndarray) -> np.ndarray:
     """``np.pad(ses, ((0, 0), (N_MED, N_MED)), mode="reflect")`` (more than N_MED bins), without its
     general machinery."""
     return np.concatenate([ses[:, N_MED:0:-1], ses, ses[:, -2:-N_MED - 2:-1]], axis=1)
-
-
-def _interpolate(n: int, centres: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """``np.interp(np.arange(n), centres, row)`` for every row of ``values`` at once, with its very
-    arithmetic: slope·(x − x_j) + y_j between the centres x_j < x_{j+1}, y_j at a centre (the
-    centres increase from 0 to n − 1; the values are finite)."""
-    x = np.arange(n, dtype=float)
-    xp = centres.astype(float)
-    if xp.size == 1:
-        return np.repeat(values, n, axis=1)
-    j = np.minimum(np.searchsorted(xp, x, side="right") - 1, xp.size - 2)
-    slopes = (values[:, 1:] - values[:, :-1]) / (xp[1:] - xp[:-1])
-    out = slopes[:, j] * (x - xp[j]) + values[:, j]
-    out[:, centres] = values
-    return out

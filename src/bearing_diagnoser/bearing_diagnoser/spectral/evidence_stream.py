@@ -412,7 +412,7 @@ class EvidenceStream:
 
         def retest(h: FaultState, held: np.ndarray) -> CombEvidence:
             lp, rho, stat, j = comb_evidence(z, df, fr, {h: terms[h]}, self.rho, s.mask_shaft, band.candidates,
-                                             exclude=np.r_[held, known])[h]
+                                             exclude=np.concatenate([held, known]))[h]
             return CombEvidence(float(lp[0]), float(rho[0]), float(stat[0]), int(j[0]))
 
         evidence = explain_away(evidence, terms, fr, retest)

@@ -49,6 +49,7 @@ from .significance import (
     averaged_comb_log10p_rows,
     averaged_median,
     comb_log10p,
+    first_best_scale,
     log10_gamma_sf,
     logsumexp_rows,
 )
@@ -288,15 +289,18 @@ def comb_sums(z: np.ndarray, df: float, fr: float, t: np.ndarray, rhos: np.ndarr
 def best_scale(s: np.ndarray, j: np.ndarray, k: int, starts=(0,)) -> np.ndarray:
     """Index of the best scale per row of S (rows, scales) with J (scales), in each run of scales
     beginning at ``starts`` ((rows, runs); the first of equals): by the tabulated p-value for
-    single windows, for k averaged ones by the p-value at the normalising median's median."""
+    single windows (compiled where no run is empty: :func:`.significance.first_best_scale`), for k
+    averaged ones by the p-value at the normalising median's median."""
+    starts = np.asarray(starts, int)
+    sizes = np.diff(np.append(starts, s.shape[1]))
+    if k == 1 and sizes.min() > 0:
+        return first_best_scale(s, j, starts)
     if k == 1:
         score = comb_log10p(s, j[None, :])
     else:
         nodes, med = averaged_median(k)
         score = np.where(j[None, :] > 0, log10_gamma_sf(j[None, :] * k, k * s * nodes[nodes.size // 2] / med), 0.0)
-    starts = np.asarray(starts, int)
     low = np.minimum.reduceat(score, starts, axis=1)
-    sizes = np.diff(np.r_[starts, score.shape[1]])
     at_low = score == np.repeat(low, sizes, axis=1)
     return np.minimum.reduceat(np.where(at_low, np.arange(score.shape[1]), score.shape[1]), starts, axis=1)
 

@@ -33,6 +33,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.special import betaincinv, gammaincc, gammaincinv, gammaln
 
+from .comb_table import first_smallest, table_log10p
 from .envelope_spectrum import N_MED
 from .gamma_tail import lentz_product
 
@@ -65,29 +66,47 @@ _TABLE = np.full((J_MAX + 1, _GRID.size), np.nan)
 _TABLE[0] = 0.0
 
 
+#: Whether every row of the table is filled (then no read looks for a missing one).
+_TABULATED = [False]
+
+
 def _rows(js) -> None:
     for j in js:
         if np.isnan(_TABLE[j, 0]):
             _TABLE[j] = np.log10(np.maximum(comb_pvalue(_GRID, int(j)), 1e-300))
+    _TABULATED[0] = not np.isnan(_TABLE[:, 0]).any()
 
 
 def warm_up() -> None:
     """Tabulate every comb size now (about 2 s) and compile or load the tail's continued fraction
     (:mod:`.gamma_tail`), not on a live stream's first windows."""
     _rows(range(1, J_MAX + 1))
+    comb_log10p(np.array([1.0]), np.array([1]))
+    first_best_scale(np.ones((1, 2)), np.ones(2, int), np.zeros(1, int))
     log10_gamma_sf(np.array([3.0]), np.array([900.0]))
 
 
 def comb_log10p(s, j) -> np.ndarray:
-    """log10 P(S > s) for combs of ``j`` bins (j = 0 gives 0), elementwise, by table lookup."""
-    s = np.clip(np.asarray(s, float), 0.0, S_MAX)
+    """log10 P(S > s) for combs of ``j`` bins (j = 0 gives 0), elementwise, by table lookup
+    (:func:`.comb_table.table_log10p`: linear interpolation on S clipped to the table)."""
+    s, j = np.broadcast_arrays(np.asarray(s, float), comb_sizes(j))
+    return table_log10p(_TABLE, np.ascontiguousarray(s).ravel(), np.ascontiguousarray(j).ravel(), S_MAX,
+                        S_STEP).reshape(s.shape)[()]
+
+
+def comb_sizes(j) -> np.ndarray:
+    """Comb sizes ``j`` as table rows (int, clipped to 0..:data:`J_MAX`), every one tabulated."""
     j = np.clip(np.asarray(j, int), 0, J_MAX)
-    if np.isnan(_TABLE[:, 0]).any():  # a comb size not tabulated yet (before warm_up)
+    if not _TABULATED[0]:  # a comb size may not be tabulated yet (before warm_up)
         _rows(np.unique(j))
-    pos = s / S_STEP
-    i = np.minimum(pos.astype(int), _GRID.size - 2)
-    w = pos - i
-    return _TABLE[j, i] * (1 - w) + _TABLE[j, i + 1] * w
+    return j
+
+
+def first_best_scale(s: np.ndarray, j: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """Per row of comb sums ``s`` (rows, scales) with ``j`` terms (scales), per run of scales from each of
+    ``starts`` (increasing, no run empty): the first scale of the smallest tabulated p-value
+    (:func:`.comb_table.first_smallest`)."""
+    return first_smallest(_TABLE, np.ascontiguousarray(s, dtype=float), comb_sizes(j), starts, S_MAX, S_STEP)
 
 
 @lru_cache(maxsize=128)
