@@ -89,14 +89,16 @@ def warm_up() -> None:
 def comb_log10p(s, j) -> np.ndarray:
     """log10 P(S > s) for combs of ``j`` bins (j = 0 gives 0), elementwise, by table lookup
     (:func:`.comb_table.table_log10p`: linear interpolation on S clipped to the table)."""
-    s, j = np.broadcast_arrays(np.asarray(s, float), comb_sizes(j))
+    s, j = np.asarray(s, float), comb_sizes(j)
+    if s.shape != j.shape:
+        s, j = np.broadcast_arrays(s, j)
     return table_log10p(_TABLE, np.ascontiguousarray(s).ravel(), np.ascontiguousarray(j).ravel(), S_MAX,
                         S_STEP).reshape(s.shape)[()]
 
 
 def comb_sizes(j) -> np.ndarray:
     """Comb sizes ``j`` as table rows (int, clipped to 0..:data:`J_MAX`), every one tabulated."""
-    j = np.clip(np.asarray(j, int), 0, J_MAX)
+    j = np.minimum(np.maximum(np.asarray(j, int), 0), J_MAX)
     if not _TABULATED[0]:  # a comb size may not be tabulated yet (before warm_up)
         _rows(np.unique(j))
     return j
