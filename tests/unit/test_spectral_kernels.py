@@ -213,11 +213,13 @@ def plain_normalise(ses: np.ndarray, stride: int = 8, level: float = np.log(2.0)
 
 
 @pytest.mark.parametrize("n", [1, 2, 9, 50, 51, 52, 101, 102, 107, 600, 1001, 4097])
-@pytest.mark.parametrize("stride", [1, 5, 8])
+@pytest.mark.parametrize("stride", [1, 5, 8, 150])
 def test_normalise_matches_the_plain_running_median(n, stride):
-    ses = RNG.exponential(size=(3, n)) * RNG.uniform(0.01, 100.0, size=(3, 1))
+    ses = RNG.exponential(size=(5, n)) * RNG.uniform(0.01, 100.0, size=(5, 1))
     ses[1, : n // 3] = 0.0  # ties and a zero median
     ses[2] = np.round(ses[2] / ses[2].mean() * 4.0)  # a few levels: ties everywhere
+    ses[3] = np.sort(ses[3])  # rising: the median moves by a whole stride of ranks at each centre
+    ses[4] = np.sort(ses[4])[::-1]  # falling
     for level in (np.log(2.0), 0.93):
         assert_array_equal(normalise(ses, stride, level), plain_normalise(ses, stride, level))
     assert_array_equal(normalise(ses[0], stride), plain_normalise(ses[0], stride))

@@ -1,11 +1,12 @@
-"""The running median of the SES normalisation, compiled: sorted windows slid bin by bin, no partition per centre.
+"""The running median of the SES normalisation, compiled: each centre's median found from the previous one.
 
 :func:`.envelope_spectrum.normalise` divides each SES bin by the median of the 2·half + 1 bins
 around it, evaluated every ``stride`` bins and interpolated linearly between. :func:`median_line`
-computes that line for every row: it keeps the window sorted and slides it from centre to centre,
-the bins that leave taken out and those that enter merged in (one pass over the window), instead of
-copying and partitioning every window (``np.partition`` of a strided view: 101/8 times the spectrum's
-size copied, the bulk of the band choice's time at 48 kHz). The median is an order statistic, so it
+computes that line for every row from the previous centre's median: a slide of ``stride`` bins moves
+the median by at most ``stride`` ranks, so one pass counts the window's values below and equal to the
+previous median, and a second selects the few values between (the k nearest beyond it, k ≤ stride),
+instead of copying and partitioning every window (``np.partition`` of a strided view: 101/8 times the
+spectrum's size copied, the bulk of the band choice's time at 48 kHz). The median is an order statistic, so it
 is the very value ``np.partition`` finds; the interpolation is ``np.interp``'s arithmetic, compiled
 (strict IEEE: no fused multiply-add), so the line is bit-identical to the NumPy formulation.
 """
@@ -17,37 +18,54 @@ from numba import njit
 
 
 @njit(cache=True)
-def _sorted_copy(src: np.ndarray, lo: int, hi: int, dst: np.ndarray) -> None:
-    """``dst[:hi - lo]`` = ``src[lo:hi]`` sorted (insertion sort: a stride's few values)."""
-    for i in range(hi - lo):
-        v = src[lo + i]
+def _kth_beyond(values: np.ndarray, pivot: float, k: int, above: bool, near: np.ndarray, top: np.ndarray) -> float:
+    """The ``k``-th value of ``values`` counted from ``pivot`` outwards: the k-th smallest of those above
+    it (``above``), else the k-th largest of those below it. ``near``, ``top``: scratch of the values' size
+    (those beyond the pivot gathered without branches, then the k nearest kept, the farthest first)."""
+    held = 0
+    if above:
+        for v in values:
+            near[held] = v
+            held += v > pivot
+    else:
+        for v in values:
+            near[held] = -v
+            held += v < pivot
+        pivot = -pivot
+    for i in range(k):  # the first k, sorted descending (the farthest first)
+        v = near[i]
         j = i
-        while j > 0 and dst[j - 1] > v:
-            dst[j] = dst[j - 1]
+        while j > 0 and top[j - 1] < v:
+            top[j] = top[j - 1]
             j -= 1
-        dst[j] = v
+        top[j] = v
+    for i in range(k, held):
+        v = near[i]
+        if v >= top[0]:
+            continue
+        j = 0
+        while j + 1 < k and top[j + 1] > v:
+            top[j] = top[j + 1]
+            j += 1
+        top[j] = v
+    return top[0] if above else -top[0]
 
 
 @njit(cache=True)
-def _slide(window: np.ndarray, leaving: np.ndarray, entering: np.ndarray, d: int, out: np.ndarray) -> None:
-    """``out`` = the sorted ``window`` without the ``d`` sorted values ``leaving`` (one element each) and
-    with the ``d`` sorted values ``entering``: one merge."""
-    k = e = o = 0
-    for i in range(window.size):
-        v = window[i]
-        if k < d and v == leaving[k]:
-            k += 1
-            continue
-        while e < d and entering[e] < v:
-            out[o] = entering[e]
-            o += 1
-            e += 1
-        out[o] = v
-        o += 1
-    while e < d:
-        out[o] = entering[e]
-        o += 1
-        e += 1
+def _median_near(values: np.ndarray, half: int, guess: float, near: np.ndarray, top: np.ndarray) -> float:
+    """The order statistic ``half`` (0-based) of ``values``, found from ``guess``, a value near it in rank
+    (the previous window's median: a slide of d bins moves it by at most d ranks): counted around the
+    guess, then the few values between selected (:func:`_kth_beyond`)."""
+    below = 0
+    equal = 0
+    for v in values:
+        below += v < guess
+        equal += v == guess
+    if below > half:
+        return _kth_beyond(values, guess, below - half, False, near, top)
+    if below + equal > half:
+        return guess
+    return _kth_beyond(values, guess, half + 1 - below - equal, True, near, top)
 
 
 @njit(cache=True)
@@ -65,24 +83,14 @@ def median_line(padded: np.ndarray, n: int, stride: int, half: int) -> np.ndarra
     xp[m - 1] = n - 1
     out = np.empty((rows, n))
     med = np.empty(m)
+    near = np.empty(width)
+    top = np.empty(width)
     for r in range(rows):
         row = padded[r]
-        window = np.sort(row[:width])
-        spare = np.empty(width)
-        leaving = np.empty(width)
-        entering = np.empty(width)
-        pos = 0
         for c in range(m):
             target = int(xp[c])
-            if target - pos >= width:
-                window = np.sort(row[target:target + width])
-            elif target > pos:
-                _sorted_copy(row, pos, target, leaving)
-                _sorted_copy(row, pos + width, target + width, entering)
-                _slide(window, leaving, entering, target - pos, spare)
-                window, spare = spare, window
-            pos = target
-            med[c] = window[half]
+            values = row[target:target + width]
+            med[c] = np.sort(values)[half] if c == 0 else _median_near(values, half, med[c - 1], near, top)
         for c in range(m - 1):
             slope = (med[c + 1] - med[c]) / (xp[c + 1] - xp[c])
             for x in range(int(xp[c]), int(xp[c + 1])):
