@@ -98,7 +98,7 @@ stops: setup full-install
 # STOP_ROUNDS times (default 34: 102 stops, about 15 min): every stop must exit 0 within the stall watchdog
 STOP_ROUNDS ?= 34
 stop-repeats: setup
-	@BEARING_STOP_REPEATS=$(STOP_ROUNDS) $(VENV_PY) -m pytest tests/ros/test_stop_repeats.py -q -s
+	@BEARING_STOP_REPEATS=$(STOP_ROUNDS) $(VENV_PY) -m pytest tests/ros/test_stop_repeats.py -q -s -o timeout=7200
 
 clean:
 	rm -rf ros_ws/build ros_ws/install ros_ws/log out

@@ -128,8 +128,9 @@ def test_a_stuck_teardown_ends_cleanly_within_its_bound(ros_graph):
     assert_clean_exit(probe)
     took = time.monotonic() - sent
     assert TEARDOWN_END_S < took < STOP_STALL_S, f"stopped after {took:.1f} s"
-    assert any(f"hook_probe: destroying the node (the DDS participant's deletion) still ran {TEARDOWN_END_S:g} s "
-               "after the stop: ended without it" in line for line in probe.lines), "\n".join(probe.lines)
+    assert any(f"hook_probe: rclpy's teardown (the node's and DDS participant's deletion) still ran "
+               f"{TEARDOWN_END_S:g} s after the stop: ended without it" in line for line in probe.lines), \
+        "\n".join(probe.lines)
     assert [m.status[0].message for m in diagnostics][-1] == STOPPED
 
 

@@ -37,7 +37,9 @@ BOUNDED = "s after the stop: ended without it"  # the teardown bound's line (nod
 @pytest.mark.skipif(ROUNDS <= 0, reason="make stop-repeats (BEARING_STOP_REPEATS rounds)")
 def test_repeated_stops_under_load_all_end_cleanly(ros_graph):
     residuals = ros_graph.subscribe(topics.RESIDUAL_OUTER_RACE)
-    ros_graph.start("bearing_sim", "simulator", name="simulator", params_file=params_file(), params={"scenario": ""})
+    simulator = ros_graph.start("bearing_sim", "simulator", name="simulator", params_file=params_file(),
+                                params={"scenario": "", "wait_for_subscribers": ""})
+    ros_graph.wait_until(lambda: any("simulator ready" in line for line in simulator.lines), 300.0, "the simulator")
     core, stops, bounded, slowest = one_core(), 0, 0, 0.0
     with busy_core(core, BUSY_LOOPS):
         for round_ in range(ROUNDS):
@@ -65,6 +67,8 @@ def test_repeated_stops_under_load_all_end_cleanly(ros_graph):
                 stops += 1
                 bounded += any(BOUNDED in line for line in member.lines)
             slowest = max(slowest, took)
+            print(f"round {round_ + 1}/{ROUNDS}: {OBSERVERS} stops clean, the last exit {took:.2f} s after SIGINT",
+                  flush=True)
             assert slowest < STOP_STALL_S
     print(f"\n{ROUNDS} rounds, {stops} stops under load: all clean, {bounded} ended by the teardown's bound; "
           f"slowest round {slowest:.2f} s from SIGINT to the last exit")

@@ -27,11 +27,12 @@
 * rclpy's teardown (``destroy_node``, ``try_shutdown``) must end ``TEARDOWN_END_S`` after the
   stop signal (a run that ended by itself: after the teardown's start); past it, the process
   prints one line and ends with its exit code (0 after a stop) from a native timer thread
-  (:mod:`.exit_timer`). Destroying a process's last node makes rmw_fastrtps delete its DDS
-  participant (announce its end, join Fast DDS's receive and event threads and the rmw
-  discovery thread), inside ``destroy_node``, with the GIL held: 0.02-0.4 s here, but rarely,
-  under load, past the 4 s watchdog (issue 26; docs/graph.md). The hook's last message is
-  out by then; only the participant's goodbye to the others is cut short.
+  (:mod:`.exit_timer`). ``destroy_node`` deletes the DDS endpoints (each announced on the
+  rmw graph topic) and, with a process's last node, the DDS participant (joining Fast DDS's
+  threads), all with the GIL held: 24-177 ms in 94 timed stops here, but rarely, under load,
+  past the 4 s watchdog (issue 26; docs/graph.md: one caught waiting for another process's
+  shared-memory port lock). The hook's last message is out by then; only the goodbyes to
+  the others are cut short.
 * Once rclpy is shut down (its log files closed), the process flushes its output and
   ends at once (``os._exit``): the interpreter's teardown is skipped. That teardown ran
   full garbage collections over the start-up heap (numba, llvmlite, scipy: about 160 000
@@ -205,8 +206,8 @@ def tear_down(program: str, nodes: list, rclpy, code: int, since: float | None) 
     flush_output()
     now = time.monotonic()
     left = max(TEARDOWN_END_S - (now - (now if since is None else since)), MIN_TEARDOWN_S)
-    with exit_after(left, code, f"{program}: destroying the node (the DDS participant's deletion) still ran "
-                                f"{TEARDOWN_END_S:g} s after the stop: ended without it"):
+    with exit_after(left, code, f"{program}: rclpy's teardown (the node's and DDS participant's deletion) "
+                                f"still ran {TEARDOWN_END_S:g} s after the stop: ended without it"):
         for node in nodes:
             node.destroy_node()
         if rclpy is not None:
