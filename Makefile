@@ -4,7 +4,7 @@
 PYTHON ?= python3
 VENV_PY := .venv/bin/python
 
-.PHONY: setup full-install demo test unit lint fuzz bench accuracy false-alarm-matrix false-alarms trend soak cli-test stops speed-data speed-tracking speed-accuracy clean
+.PHONY: setup full-install demo test unit lint fuzz bench accuracy false-alarm-matrix false-alarms trend soak cli-test stops stop-repeats speed-data speed-tracking speed-accuracy clean
 
 setup:
 	@$(PYTHON) tools/bootstrap.py
@@ -93,6 +93,12 @@ soak: setup
 STOPS ?= 20
 stops: setup full-install
 	@BEARING_REAL_CLI=1 BEARING_STOPS=$(STOPS) $(VENV_PY) -m pytest tests/ros/test_ros2_cli.py -k starved_monitor -q -s
+
+# SIGINT to three observers at once beside the simulator, pinned to one core beside two busy loops,
+# STOP_ROUNDS times (default 34: 102 stops, about 15 min): every stop must exit 0 within the stall watchdog
+STOP_ROUNDS ?= 34
+stop-repeats: setup
+	@BEARING_STOP_REPEATS=$(STOP_ROUNDS) $(VENV_PY) -m pytest tests/ros/test_stop_repeats.py -q -s -o timeout=7200
 
 clean:
 	rm -rf ros_ws/build ros_ws/install ros_ws/log out

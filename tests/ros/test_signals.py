@@ -17,7 +17,7 @@ from ros_harness import REPO_ROOT, executable
 
 from bearing_bringup.graph import GRAPH
 from bearing_common import topics
-from bearing_common.node_main import STOP_STALL_S
+from bearing_common.node_main import STOP_STALL_S, TEARDOWN_END_S
 from bearing_recordings.bag_read import read_bag
 
 pytestmark = pytest.mark.ros
@@ -110,6 +110,27 @@ def test_shutdown_hook_publishes_a_last_message(ros_graph, mode):
     ros_graph.wait_until(lambda: any(m.status[0].message == RUNNING for m in diagnostics), 60.0, "the probe running")
     send(probe.process.pid, mode)
     assert_clean_exit(probe)
+    assert [m.status[0].message for m in diagnostics][-1] == STOPPED
+
+
+def test_a_stuck_teardown_ends_cleanly_within_its_bound(ros_graph):
+    """rclpy's teardown (destroy_node, where rmw deletes the DDS participant) held in C with the GIL
+    past TEARDOWN_END_S after the signal: the process still ends with exit 0 and one line, after the
+    hook's last message, before the stall watchdog (without the bound: its dump and exit 1 at 4 s)."""
+    from hook_probe import RUNNING, STOPPED
+
+    diagnostics = ros_graph.subscribe(topics.DIAGNOSTICS)
+    probe = ros_graph.start("", "", name="hook_probe", argv=[
+        sys.executable, str(REPO_ROOT / "tests" / "ros" / "hook_probe.py"), "--stuck-teardown"])
+    ros_graph.wait_until(lambda: any(m.status[0].message == RUNNING for m in diagnostics), 60.0, "the probe running")
+    sent = time.monotonic()
+    send(probe.process.pid, "SIGINT")
+    assert_clean_exit(probe)
+    took = time.monotonic() - sent
+    assert TEARDOWN_END_S < took < STOP_STALL_S, f"stopped after {took:.1f} s"
+    assert any(f"hook_probe: rclpy's teardown (the node's and DDS participant's deletion) still ran "
+               f"{TEARDOWN_END_S:g} s after the stop: ended without it" in line for line in probe.lines), \
+        "\n".join(probe.lines)
     assert [m.status[0].message for m in diagnostics][-1] == STOPPED
 
 

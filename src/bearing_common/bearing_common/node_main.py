@@ -24,15 +24,23 @@
   thread on stderr and ends the process with exit code 1 (``StopSignals(stall_s=...)``),
   so the log says where a clean-up or callback hung, before a supervisor escalates to
   SIGKILL at 5 s.
+* rclpy's teardown (``destroy_node``, ``try_shutdown``) must end ``TEARDOWN_END_S`` after the
+  stop signal (a run that ended by itself: after the teardown's start); past it, the process
+  prints one line and ends with its exit code (0 after a stop) from a native timer thread
+  (:mod:`.exit_timer`). ``destroy_node`` deletes the DDS endpoints (each announced on the
+  rmw graph topic) and, with a process's last node, the DDS participant (joining Fast DDS's
+  threads), all with the GIL held: 24-177 ms in 94 timed stops here, but rarely, under load,
+  past the 4 s watchdog (issue 26; docs/graph.md: one caught waiting for another process's
+  shared-memory port lock). The hook's last message is out by then; only the goodbyes to
+  the others are cut short.
 * Once rclpy is shut down (its log files closed), the process flushes its output and
   ends at once (``os._exit``): the interpreter's teardown is skipped. That teardown ran
   full garbage collections over the start-up heap (numba, llvmlite, scipy: about 160 000
   tracked objects, 0.15 s per collection), 0.8-1 s of CPU per node after the node had
   already stopped; four nodes stopping at once on two busy cores ran past the 4 s
   watchdog (``Timeout``, ``<no Python frame>``, exit 1). A stop is thus bounded by the
-  node's own clean-up (the run loop's ``POLL_S``, ``on_shutdown()``, destroying the node,
-  rclpy's shutdown) and then by the watchdog; the memory goes back to the system with the
-  process.
+  node's own clean-up (the run loop's ``POLL_S``, ``on_shutdown()``) and ``TEARDOWN_END_S``,
+  and then by the watchdog; the memory goes back to the system with the process.
 
 A node with a run loop of its own passes ``run(node, stop)``, which must return soon
 after ``stop`` becomes true (within ``POLL_S``, as the default spin does). Several nodes
@@ -46,11 +54,15 @@ import importlib
 import os
 import signal
 import sys
+import time
 
+from .exit_timer import exit_after
 from .stop_signals import StopRequested, StopSignals
 
 POLL_S = 0.1  #: s, longest a stop request waits for the default spin to notice it
 STOP_STALL_S = 4.0  #: s, a stop taking longer prints every thread's stack and exits 1
+TEARDOWN_END_S = 3.0  #: s after the stop signal (or the teardown's start) by which rclpy's teardown must end
+MIN_TEARDOWN_S = 0.1  #: s the teardown gets when the run's own end already took the rest
 
 
 def spin_until(nodes, stop) -> None:
@@ -97,11 +109,16 @@ def run_nodes_main(program: str, make_nodes, run=None, args=None):
 
 def end_process(code: int):
     """Flush Python's and C's buffered output, then exit with ``code`` without the interpreter's teardown."""
+    flush_output()
+    os._exit(code)
+
+
+def flush_output() -> None:
+    """Python's and C's buffered output out to the file descriptors."""
     for stream in (sys.stdout, sys.stderr):
         if stream is not None:
             stream.flush()
     ctypes.CDLL(None).fflush(None)
-    os._exit(code)
 
 
 def run_executable(program: str, main: str, args=None):
@@ -152,18 +169,23 @@ def stopped_while_starting(program: str, signum: int):
 def run_nodes(program: str, make_nodes, run=None, args=None) -> int:
     """The run of :func:`run_nodes_main` up to rclpy's shutdown; return the exit code."""
     with process_stop_signals(program) as stop:
-        nodes, rclpy = [], None  # rclpy is bound once its import completed
+        nodes, rclpy, code = [], None, 1  # rclpy is bound once its import completed; 1 until the run ended well
         try:
-            with stop.aborting():
-                import rclpy
-                from rclpy.signals import SignalHandlerOptions
+            try:
+                with stop.aborting():
+                    import rclpy
+                    from rclpy.signals import SignalHandlerOptions
 
-                rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-                try:
-                    nodes = make_nodes()
-                except ValueError as exc:
-                    print(f"{program}: {exc}", file=sys.stderr)  # noqa: T201 (the one-line error is the interface)
-                    return 2
+                    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+                    try:
+                        nodes = make_nodes()
+                    except ValueError as exc:
+                        print(f"{program}: {exc}", file=sys.stderr)  # noqa: T201 (the one-line error is the interface)
+                        code = 2
+                        return code
+            except StopRequested:
+                code = 0  # a stop while starting: process_stop_signals ends it as one
+                raise
             (run or spin_until)(nodes, stop)
             if stop:
                 nodes[0].get_logger().info(f"{signal.Signals(stop.signal).name} received: stopping")
@@ -171,9 +193,22 @@ def run_nodes(program: str, make_nodes, run=None, args=None) -> int:
                 hook = getattr(node, "on_shutdown", None)
                 if hook is not None:
                     hook()
+            code = 0
         finally:
-            for node in nodes:
-                node.destroy_node()
-            if rclpy is not None:
-                rclpy.try_shutdown()
-    return 0
+            tear_down(program, nodes, rclpy, code, stop.arrived)
+    return code
+
+
+def tear_down(program: str, nodes: list, rclpy, code: int, since: float | None) -> None:
+    """Destroy ``nodes`` and shut rclpy down, ending by :data:`TEARDOWN_END_S` after ``since`` (the stop
+    signal's time.monotonic(); None: now): past it the process ends with ``code`` and one line (see
+    the module's docstring)."""
+    flush_output()
+    now = time.monotonic()
+    left = max(TEARDOWN_END_S - (now - (now if since is None else since)), MIN_TEARDOWN_S)
+    with exit_after(left, code, f"{program}: rclpy's teardown (the node's and DDS participant's deletion) "
+                                f"still ran {TEARDOWN_END_S:g} s after the stop: ended without it"):
+        for node in nodes:
+            node.destroy_node()
+        if rclpy is not None:
+            rclpy.try_shutdown()

@@ -39,6 +39,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -54,6 +55,7 @@ class StopSignals:
 
     def __init__(self, stall_s: float | None = None, stuck_start: Callable[[int], None] | None = None):
         self.signal: int | None = None
+        self.arrived: float | None = None  #: time.monotonic() s when the first stop signal arrived
         self.abort = False  #: the first signal raises StopRequested (see the module's docstring)
         self.aborted = False  #: the first signal came while ``abort`` was set (a start-up was interrupted)
         self._old = {}
@@ -89,6 +91,7 @@ class StopSignals:
         try:
             while byte := os.read(fd, 1):
                 if byte[0] in STOP_SIGNALS and not armed:
+                    self.arrived = self.arrived or time.monotonic()  # this thread runs while the main one is held in C
                     faulthandler.dump_traceback_later(self._stall_s, exit=True)
                     armed = True
                     if self.abort and self._stuck_start is not None:
@@ -112,6 +115,7 @@ class StopSignals:
     def _handle(self, signum, _frame) -> None:
         if self.signal is None:
             self.signal = signum
+            self.arrived = self.arrived or time.monotonic()
             if self.abort:
                 self.aborted = True
                 raise StopRequested(signum)
