@@ -35,8 +35,10 @@ offline, a recording without a measured speed may take :func:`track_speed`'s
      changing by at most 2·``max_rate`` per second (the truth and the track may each change
      at ``max_rate``); the new track is c times the track's mean speed over each frame (its
      angle over its duration), at the frame's centre, linear between centres (the coarse
-     track's hop-to-hop jitter goes) and, beyond the first and last centre, along the line
-     fitted to the centres within one frame of that end (frames also end at the last sample).
+     track's hop-to-hop jitter goes; ``linear=False``: the track times c, keeping its changes
+     from hop to hop, a constant speed's wander) and, beyond the first and last centre, along
+     the line fitted to the centres within one frame of that end (frames also end at the last
+     sample).
      The first round searches the whole told
      range about the track, the second ±1 %: the coarse frames' 1 Hz bins, a strong line's
      skirt and the ±1 bin tolerance merge line families 5-10 % apart, which the angle domain
@@ -151,7 +153,7 @@ class SpeedTrack:
 
 def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonics: int = 8,
                 frame: float = 1.0, hop: float = 0.25, max_rate: float = 0.15,
-                refine: int = 2) -> SpeedTrack:
+                refine: int = 2, linear: bool = True) -> SpeedTrack:
     """Tacho-less instantaneous shaft speed of ``x`` between ``rpm_lo`` and ``rpm_hi`` rev/min
     (module docstring).
 
@@ -165,6 +167,10 @@ def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonic
     max_rate : largest relative speed change per second followed (1/s): 0.15 covers a
         900→1800 rev/min run-up in 10 s.
     refine : rounds of refinement in the angle domain (0: the coarse track only).
+    linear : the refined track is linear between the refinement frames' centres (a speed that
+        changes smoothly: the coarse track's hop-to-hop jitter goes); False keeps the coarse
+        track's changes from hop to hop, corrected by the refinement (a constant speed's own
+        wander, ±0.15 % within tenths of a second on CWRU, which the coarse frames resolve).
 
     Raises ValueError on a bad range or a signal too short for two coarse frames.
     """
@@ -191,7 +197,7 @@ def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonic
         span = _SCALE_RANGES[min(round_, len(_SCALE_RANGES) - 1)]
         if span is None:  # the whole told range about the track
             span = max(bounds[1] / float(speed.min()), float(speed.max()) / bounds[0]) - 1.0
-        speed = _refine(x, fs, speed, harmonics, max_rate, span, bounds)
+        speed = _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear)
     return SpeedTrack(speed, fs)
 
 
@@ -249,10 +255,11 @@ def _best_path(score: np.ndarray, reach: int) -> np.ndarray:
     return path
 
 
-def _refine(x, fs, speed, harmonics, max_rate, span, bounds):
-    """One refinement round (module docstring): the per-sample speed times the correction c within
-    ±``span`` that puts the most line power at orders k·c in the angle-domain frames, the corrected
-    speed kept within ``bounds`` (rad/s)."""
+def _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear):
+    """One refinement round (module docstring): the correction c within ±``span`` that puts the most
+    line power at orders k·c in the angle-domain frames, the corrected speed kept within ``bounds``
+    (rad/s); the new track is c times the frames' mean speeds, linear between them (``linear``), or
+    the per-sample speed times c interpolated."""
     a = resample_to_angle(x, fs, angle_from_speed(speed, fs), TRACK_SAMPLES_PER_REV)
     rev_s = 2.0 * math.pi / float(np.mean(speed))
     revs = min(max(_REFINE_REVS, int(round(_REFINE_FRAME / rev_s))), a.samples.size // TRACK_SAMPLES_PER_REV)
@@ -271,7 +278,8 @@ def _refine(x, fs, speed, harmonics, max_rate, span, bounds):
     comb = np.where((candidates >= bounds[0]) & (candidates <= bounds[1]), _comb(score, scales / d_order, harmonics),
                     -np.inf)
     c = scales[_best_path(comb, reach)]
-    return _piecewise_linear(np.arange(x.size) / fs, 0.5 * (t0 + t1), c * mean_speed, float(np.median(t1 - t0)))
+    t, knots, span = np.arange(x.size) / fs, 0.5 * (t0 + t1), float(np.median(t1 - t0))
+    return _piecewise_linear(t, knots, c * mean_speed, span) if linear else speed * _piecewise_linear(t, knots, c, span)
 
 
 def _piecewise_linear(t: np.ndarray, knots: np.ndarray, values: np.ndarray, span: float) -> np.ndarray:
