@@ -31,8 +31,21 @@ offline, a recording without a measured speed may take :func:`track_speed`'s
      (:func:`resample_to_angle`: where the track is right, the shaft lines stand still at
      whole orders however the speed changes) and, per frame of ≥ 2 s (the lines no longer
      smear, so frames can be long and their bins fine), the same comb over orders k·c for a
-     correction c within ±3 % (then ±1 %) in steps of 0.02 %, followed through the frames
-     the same way; the speed is multiplied by c.
+     correction c in steps of 0.02 %, followed through the frames the same way with c
+     changing by at most 2·``max_rate`` per second (the truth and the track may each change
+     at ``max_rate``); the new track is c times the track's mean speed over each frame (its
+     angle over its duration), at the frame's centre, linear between centres (the coarse
+     track's hop-to-hop jitter goes; ``linear=False``: the track times c, keeping its changes
+     from hop to hop, a constant speed's wander) and, beyond the first and last centre, along
+     the line fitted to the centres within one frame of that end (frames also end at the last
+     sample).
+     The first round searches the whole told
+     range about the track, the second ±1 %: the coarse frames' 1 Hz bins, a strong line's
+     skirt and the ±1 bin tolerance merge line families 5-10 % apart, which the angle domain
+     separates (HIT-SM IR8_900 warped along a ramp: the huge 1× line and the inner-race line
+     made a family at 0.91× the shaft; Normal_900 along −20 %: a family at 1.1× it, whose 3rd
+     and 6th harmonics are the mains' 50 and 100 Hz, which the warp made shaft-synchronous;
+     both tracked 8-15 % off, within 1 % since).
 
   Measured accuracy (``python -m benchmarks.speed_tracking``): on a synthetic harmonic
   series along a ±20 % ramp 0.04 % RMS; on the warped development recordings see the
@@ -140,7 +153,7 @@ class SpeedTrack:
 
 def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonics: int = 8,
                 frame: float = 1.0, hop: float = 0.25, max_rate: float = 0.15,
-                refine: int = 2) -> SpeedTrack:
+                refine: int = 2, linear: bool = True) -> SpeedTrack:
     """Tacho-less instantaneous shaft speed of ``x`` between ``rpm_lo`` and ``rpm_hi`` rev/min
     (module docstring).
 
@@ -154,6 +167,10 @@ def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonic
     max_rate : largest relative speed change per second followed (1/s): 0.15 covers a
         900→1800 rev/min run-up in 10 s.
     refine : rounds of refinement in the angle domain (0: the coarse track only).
+    linear : the refined track is linear between the refinement frames' centres (a speed that
+        changes smoothly: the coarse track's hop-to-hop jitter goes); False keeps the coarse
+        track's changes from hop to hop, corrected by the refinement (a constant speed's own
+        wander, ±0.15 % within tenths of a second on CWRU, which the coarse frames resolve).
 
     Raises ValueError on a bad range or a signal too short for two coarse frames.
     """
@@ -166,7 +183,7 @@ def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonic
     if x.size < 2 * n_frame:
         raise ValueError(f"need at least {2 * frame:g} s of signal to track the speed, got {x.size / fs:.3g} s")
     n_hop = max(1, int(round(hop * fs)))
-    starts = np.arange(0, x.size - n_frame + 1, n_hop)
+    starts = _frame_starts(x.size, n_frame, n_hop)
     f_lo, f_hi = rpm_lo / 60.0, rpm_hi / 60.0
     df = fs / n_frame
     score = _line_score(_frame_power(x, starts, n_frame), int((harmonics + 1) * f_hi / df) + 3, int(f_lo / df))
@@ -175,8 +192,12 @@ def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonic
     path = _best_path(_comb(score, grid / df, harmonics), max(1, int(math.ceil(max_rate * hop / _GRID_STEP))))
     t = np.arange(x.size) / fs
     speed = 2.0 * math.pi * np.interp(t, (starts + 0.5 * n_frame) / fs, grid[path])
+    bounds = (2.0 * math.pi * f_lo, 2.0 * math.pi * f_hi)
     for round_ in range(max(0, int(refine))):
-        speed = _refine(x, fs, speed, harmonics, max_rate, _SCALE_RANGES[min(round_, len(_SCALE_RANGES) - 1)])
+        span = _SCALE_RANGES[min(round_, len(_SCALE_RANGES) - 1)]
+        if span is None:  # the whole told range about the track
+            span = max(bounds[1] / float(speed.min()), float(speed.max()) / bounds[0]) - 1.0
+        speed = _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear)
     return SpeedTrack(speed, fs)
 
 
@@ -186,8 +207,15 @@ _GRID_STEP = 0.001
 #: Refinement: frame (s) and its least number of revolutions, hops per frame, zero padding.
 _REFINE_FRAME, _REFINE_REVS, _REFINE_OVERLAP, _REFINE_PAD = 2.0, 16, 4, 4
 
-#: Relative step of the refinement's correction, and its range (±) per round.
-_SCALE_STEP, _SCALE_RANGES = 2e-4, (0.03, 0.01)
+#: Relative step of the refinement's correction, and its range (±) per round (None: the whole told range).
+_SCALE_STEP, _SCALE_RANGES = 2e-4, (None, 0.01)
+
+
+def _frame_starts(n: int, n_frame: int, hop: int) -> np.ndarray:
+    """Starts of frames of ``n_frame`` samples every ``hop`` over ``n`` samples, the last one ending at the last
+    sample (a frame centre, where the track is measured, as near the end as a frame goes)."""
+    starts = np.arange(0, n - n_frame + 1, hop)
+    return starts if starts[-1] == n - n_frame else np.r_[starts, n - n_frame]
 
 
 def _frame_power(x: np.ndarray, starts: np.ndarray, n: int, pad: int = 1) -> np.ndarray:
@@ -227,20 +255,40 @@ def _best_path(score: np.ndarray, reach: int) -> np.ndarray:
     return path
 
 
-def _refine(x, fs, speed, harmonics, max_rate, span):
-    """One refinement round (module docstring): the per-sample speed times the correction c within
-    ±``span`` that puts the most line power at orders k·c in the angle-domain frames."""
+def _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear):
+    """One refinement round (module docstring): the correction c within ±``span`` that puts the most
+    line power at orders k·c in the angle-domain frames, the corrected speed kept within ``bounds``
+    (rad/s); the new track is c times the frames' mean speeds, linear between them (``linear``), or
+    the per-sample speed times c interpolated."""
     a = resample_to_angle(x, fs, angle_from_speed(speed, fs), TRACK_SAMPLES_PER_REV)
     rev_s = 2.0 * math.pi / float(np.mean(speed))
     revs = min(max(_REFINE_REVS, int(round(_REFINE_FRAME / rev_s))), a.samples.size // TRACK_SAMPLES_PER_REV)
     n_frame = revs * TRACK_SAMPLES_PER_REV
     hop = max(1, n_frame // _REFINE_OVERLAP)
-    starts = np.arange(0, a.samples.size - n_frame + 1, hop)
+    starts = _frame_starts(a.samples.size, n_frame, hop)
     d_order = TRACK_SAMPLES_PER_REV / (_REFINE_PAD * n_frame)  # orders per bin
     power = _frame_power(a.samples, starts, n_frame, _REFINE_PAD)
-    score = _line_score(power, int((harmonics + 1.5) / d_order), int(1.0 / d_order))
-    scales = 1.0 + np.arange(-span, span + 0.5 * _SCALE_STEP, _SCALE_STEP)
-    reach = max(1, int(math.ceil(0.5 * max_rate * hop / TRACK_SAMPLES_PER_REV * rev_s / _SCALE_STEP)))
-    c = scales[_best_path(_comb(score, scales / d_order, harmonics), reach)]
-    centres = a.times[np.minimum(starts + n_frame // 2, a.times.size - 1)]
-    return speed * np.interp(np.arange(x.size) / fs, centres, c)
+    scales = 1.0 + np.arange(-min(span, 0.9), span + 0.5 * _SCALE_STEP, _SCALE_STEP)
+    score = _line_score(power, int((harmonics * scales[-1] + 1.5) / d_order), int(1.0 / d_order))
+    # c = truth / track changes at most as fast as both together: 2·max_rate
+    reach = max(1, int(math.ceil(2.0 * max_rate * hop / TRACK_SAMPLES_PER_REV * rev_s / _SCALE_STEP)))
+    t0, t1 = a.times[starts], a.times[starts + n_frame - 1]
+    mean_speed = 2.0 * math.pi * (n_frame - 1) / TRACK_SAMPLES_PER_REV / (t1 - t0)  # the track's, per frame
+    candidates = mean_speed[:, None] * scales[None, :]
+    comb = np.where((candidates >= bounds[0]) & (candidates <= bounds[1]), _comb(score, scales / d_order, harmonics),
+                    -np.inf)
+    c = scales[_best_path(comb, reach)]
+    t, knots, span = np.arange(x.size) / fs, 0.5 * (t0 + t1), float(np.median(t1 - t0))
+    return _piecewise_linear(t, knots, c * mean_speed, span) if linear else speed * _piecewise_linear(t, knots, c, span)
+
+
+def _piecewise_linear(t: np.ndarray, knots: np.ndarray, values: np.ndarray, span: float) -> np.ndarray:
+    """``values`` at ``knots`` interpolated linearly at ``t``; beyond the first and last knot, extended along
+    the straight line fitted (least squares) to the knots within ``span`` of that end (a ramp goes on to the
+    record's ends; one knot's noise must not set the slope)."""
+    out = np.interp(t, knots, values)
+    for end, near in ((t < knots[0], knots <= knots[0] + span), (t > knots[-1], knots >= knots[-1] - span)):
+        if np.any(end):
+            line = np.polyfit(knots[near], values[near], 1) if np.count_nonzero(near) > 1 else values[near][:1]
+            out[end] = np.polyval(line, t[end])
+    return out
