@@ -38,14 +38,13 @@ offline, a recording without a measured speed may take :func:`track_speed`'s
      track's hop-to-hop jitter goes; ``linear=False``: the track times c, keeping its changes
      from hop to hop, a constant speed's wander) and, beyond the first and last centre, along
      the line fitted to the centres within one frame of that end (frames also end at the last
-     sample).
-     The first round searches the whole told
-     range about the track, the second ±1 %: the coarse frames' 1 Hz bins, a strong line's
-     skirt and the ±1 bin tolerance merge line families 5-10 % apart, which the angle domain
-     separates (HIT-SM IR8_900 warped along a ramp: the huge 1× line and the inner-race line
-     made a family at 0.91× the shaft; Normal_900 along −20 %: a family at 1.1× it, whose 3rd
-     and 6th harmonics are the mains' 50 and 100 Hz, which the warp made shaft-synchronous;
-     both tracked 8-15 % off, within 1 % since).
+     sample). The first round searches the whole told range about the track, the second
+     ±1 %: the coarse frames' 1 Hz bins, a strong line's skirt and the ±1 bin tolerance merge
+     line families 5-10 % apart, which the angle domain separates (HIT-SM IR8_900 warped along
+     a ramp: the huge 1× line and the inner-race line made a family at 0.91× the shaft;
+     Normal_900 along −20 and −40 %: a family at 1.1× it, whose 3rd and 6th harmonics are the
+     mains' 50 and 100 Hz, which the warp made shaft-synchronous; both tracked 7-16 % off,
+     within 0.75 % since).
 
   Measured accuracy (``python -m benchmarks.speed_tracking``): on a synthetic harmonic
   series along a ±20 % ramp 0.04 % RMS; on the warped development recordings see the
@@ -278,8 +277,10 @@ def _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear):
     comb = np.where((candidates >= bounds[0]) & (candidates <= bounds[1]), _comb(score, scales / d_order, harmonics),
                     -np.inf)
     c = scales[_best_path(comb, reach)]
-    t, knots, span = np.arange(x.size) / fs, 0.5 * (t0 + t1), float(np.median(t1 - t0))
-    return _piecewise_linear(t, knots, c * mean_speed, span) if linear else speed * _piecewise_linear(t, knots, c, span)
+    t, knots, frame_s = np.arange(x.size) / fs, 0.5 * (t0 + t1), float(np.median(t1 - t0))
+    if linear:
+        return _piecewise_linear(t, knots, c * mean_speed, frame_s)
+    return speed * _piecewise_linear(t, knots, c, frame_s)
 
 
 def _piecewise_linear(t: np.ndarray, knots: np.ndarray, values: np.ndarray, span: float) -> np.ndarray:
