@@ -29,6 +29,7 @@ import statistics
 import subprocess
 import sys
 import time
+from collections import defaultdict
 from dataclasses import dataclass
 
 from graph_helpers import transitions, wait_spec
@@ -164,9 +165,17 @@ class Run:
             time.sleep(0.05)
 
     def output(self) -> str:
+        """Each process's last lines; of a probe's messages, per topic only how many and the last stamp."""
         return "\n".join(f"--- {m.name} on host {self.placement[m.name]} (exit {m.returncode}) ---\n"
                          + "\n".join(line for line in m.lines[-30:] if not line.startswith('{"event": "msg"'))
-                         for m in self.group.members)
+                         + self.received(m) for m in self.group.members)
+
+    def received(self, member) -> str:
+        per_topic = defaultdict(list)
+        for item in self.events(member, "msg"):
+            per_topic[item["topic"]].append(item["stamp"])
+        return "".join(f"\n({len(stamps)} messages on {name}, the last stamped {stamps[-1]:.3f} s)"
+                       for name, stamps in per_topic.items())
 
     def stop_one(self, member, timeout: float = 10.0) -> int:
         """Stop one process (SIGINT to its group, SIGKILL after ``timeout``) and forget it."""
@@ -217,7 +226,7 @@ def run_scenario(hosts, placement: dict, mode: str, listed_servers: dict | None 
         assert chunks, run.output()
         end = max(c["end"] for c in chunks)
         run.wait_until(lambda: any(s["stamp"] >= end - ONSET_TOL_S for s in run.events(probe_b, "msg")), RUN_S,
-                       "the diagnoser's decision on the last window")
+                       f"the diagnoser's decision on the last window (ending at {end:.3f} s)")
         states = run.events(probe_b, "msg", topics.FAULT_STATE)
         sent = {host: hosts.tx_bytes(host) - sent_before[host] for host in hosts.names}
         members = {m.name: m for m in run.group.members}

@@ -30,6 +30,7 @@ from collections.abc import Callable
 import numpy as np
 
 from bearing_common import topics
+from bearing_common.delivery import wait_acknowledged
 from bearing_common.stop_signals import StopSignals
 
 from .bag_read import bag_namespace_hint, find_topic, iter_raw, open_bag
@@ -48,9 +49,6 @@ MATCH_SETTLE = 0.5
 
 #: Keep-last depth of the player's stream publishers (≥ the graph's 50, to absorb bursts).
 PLAY_DEPTH = 200
-
-#: Longest wait (s) at the end for reliable subscribers to acknowledge every message.
-ACK_TIMEOUT = 5.0
 
 LOG = logging.getLogger(__name__)
 
@@ -213,14 +211,12 @@ class Player:
         for topic, translator in self.translators.items():
             self.publish(topic, translator.flush())
 
-    def finish(self) -> None:
-        """Wait for reliable subscribers' acknowledgements, then serve late joiners a little."""
-        from rclpy.duration import Duration
-        for pub in self.pubs.values():
-            pub.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT))
-        end = time.monotonic() + 0.2
-        while time.monotonic() < end:
-            self.executor.spin_once(timeout_sec=0.05)
+    def finish(self, stop) -> list[str]:
+        """Wait for reliable subscribers' acknowledgements (:func:`.delivery.wait_acknowledged`), then
+        serve late joiners a little; return the topics not acknowledged in time."""
+        unacknowledged = wait_acknowledged(self.pubs.values(), stop=stop)
+        self.spin_for(0.2, stop)
+        return unacknowledged
 
 
 def play(bag_dir, rate: float = 1.0, clock: bool = False, names=None, loop: bool = False,
@@ -262,7 +258,8 @@ def play(bag_dir, rate: float = 1.0, clock: bool = False, names=None, loop: bool
                 player.play_pass(reader, conns, rate, stop)
                 if not loop:
                     break
-            player.finish()
+            if unacknowledged := player.finish(stop):
+                log(f"bearing-bag: not every subscriber acknowledged the end of {', '.join(unacknowledged)}")
         finally:
             try:
                 rclpy.shutdown(context=context)

@@ -22,6 +22,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 
 from bearing_common import topics
+from bearing_common.delivery import ACK_TIMEOUT_S, wait_acknowledged
 from bearing_common.node_main import POLL_S, run_node_main
 from bearing_common.parameters import declare
 from bearing_common.stamps import to_stamp
@@ -67,13 +68,19 @@ class SimulatorNode(Node):
             return "normal operation (no end)"
         return ", ".join(f"{state.label} {seconds:g} s" for state, seconds in self.run.schedule)
 
-    def subscribers(self, topic: str) -> int:
-        """Subscriptions matched by our publisher of ``topic`` (samples published from now on reach
-        them: what a volatile stream needs), else the graph's count for topics of other nodes."""
+    @property
+    def streams(self) -> dict:
+        """The run's publishers by topic name (not /clock's)."""
         own = {topics.VIBRATION.name: self.pub_vib, topics.UNBALANCE.name: self.pub_unb,
                topics.SHAFT_SPEED.name: self.pub_speed, topics.TRUTH.name: self.pub_truth}
         if self.pub_tacho is not None:
             own[topics.TACHOMETER.name] = self.pub_tacho
+        return own
+
+    def subscribers(self, topic: str) -> int:
+        """Subscriptions matched by our publisher of ``topic`` (samples published from now on reach
+        them: what a volatile stream needs), else the graph's count for topics of other nodes."""
+        own = self.streams
         return own[topic].get_subscription_count() if topic in own else self.count_subscribers(topic)
 
     def on_change(self, changed: dict) -> None:
@@ -140,7 +147,9 @@ def warm_up(node: SimulatorNode) -> None:
 
 def run_node(node: SimulatorNode, stop) -> None:
     """Hold the start until the consumers listen, then publish until the run ends or a stop
-    is requested, serving parameter changes and DDS while waiting for real time."""
+    is requested, serving parameter changes and DDS while waiting for real time; at the run's end,
+    wait until every reliable subscriber has acknowledged the last chunk (:mod:`bearing_common.delivery`),
+    then linger."""
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     try:
@@ -153,6 +162,9 @@ def run_node(node: SimulatorNode, stop) -> None:
         for topic, n, have in gate.missing(node.subscribers):
             node.get_logger().warn(f"starting with {have} of {n} subscribers to {topic}")
         publish(node, executor, stop)
+        if unacknowledged := wait_acknowledged(node.streams.values(), stop=stop):
+            node.get_logger().warn(f"not every subscriber acknowledged the end of {', '.join(unacknowledged)} "
+                                   f"within {ACK_TIMEOUT_S:g} s")
         linger_end = time.monotonic() + float(node.values["linger"])
         while not stop and time.monotonic() < linger_end:
             executor.spin_once(timeout_sec=0.05)

@@ -65,7 +65,8 @@ PARAMETERS = (
                   "consumers are ready), at most subscriber_timeout s; empty = start at once",
                   lambda v: _check_wait_spec(v)),
     ParameterSpec("subscriber_timeout", 30.0, "seconds to wait for subscribers before starting anyway", positive),
-    ParameterSpec("linger", 1.0, "seconds to keep serving after the last chunk so subscribers receive it",
+    ParameterSpec("linger", 1.0, "seconds to keep serving after the last chunk has been acknowledged (late joiners of "
+                  "the latched topics)",
                   non_negative),
 )
 
