@@ -23,7 +23,11 @@ BUSY_LOOPS = 2  #: beside the graph on its core, to start with
 MAX_BUSY_LOOPS = 6  #: the graph's simulator then gets at most a seventh of the core
 STARVE_STEP_S = 8.0  #: s without the graph behind real time before one more busy loop
 
-BUSY_LOOP = "import os, sys\nos.sched_setaffinity(0, {int(sys.argv[1])})\nwhile True:\n    pass\n"
+#: A busy process on core argv[1]; it ends with its parent, pid argv[2] (PR_SET_PDEATHSIG), so that a test
+#: process killed by pytest-timeout leaves no loop behind.
+BUSY_LOOP = ("import ctypes, os, signal, sys\nctypes.CDLL(None).prctl(1, signal.SIGKILL)\n"
+             "if os.getppid() != int(sys.argv[2]):\n    sys.exit()\n"
+             "os.sched_setaffinity(0, {int(sys.argv[1])})\nwhile True:\n    pass\n")
 
 
 def one_core() -> int:
@@ -50,7 +54,7 @@ def group_pids(pgid: int) -> list:
 
 
 def busy_loop(core: int) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-c", BUSY_LOOP, str(core)], stdin=subprocess.DEVNULL)
+    return subprocess.Popen([sys.executable, "-c", BUSY_LOOP, str(core), str(os.getpid())], stdin=subprocess.DEVNULL)
 
 
 @contextlib.contextmanager
