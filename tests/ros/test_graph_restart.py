@@ -1,9 +1,10 @@
 """Faults survived: ``bearing-graph`` restarts a node killed with SIGKILL and the graph recovers.
 
-One run of the graph per killed node (a 600 s outer-race schedule, so the only correct
-state is OUTER_RACE): the node is restarted after 1 s, nothing else is, the fault state
-comes back correct, a late DDS participant gets the current state, and a Ctrl-C then
-stops every node with exit code 0. The recovery time (kill -> first correct fault_state
+One run of the graph (a 600 s outer-race schedule, so the only correct state is
+OUTER_RACE) in which each node is killed in turn, once the graph has recovered from the
+previous kill: the node is restarted after 1 s, nothing else is, the fault state comes back
+correct, a late DDS participant gets the current state; a Ctrl-C then stops every node
+with exit code 0. The recovery time (kill -> first correct fault_state
 computed from the restarted node's output) is printed (``-s``).
 """
 
@@ -30,11 +31,15 @@ pytestmark = pytest.mark.ros
 
 GRAPH_CLI = [sys.executable, "-m", "bearing_bringup.graph_cli"]
 SCHEDULE = "outer_race:600"
+#: The nodes killed in turn in one run, the simulator last (its new stream starts the stamps at 0 again).
+ORDER = ("or_observer", "ir_observer", "diagnoser", "simulator")
 OUTPUT = {"simulator": topics.VIBRATION, "or_observer": topics.RESIDUAL_OUTER_RACE,
           "ir_observer": topics.RESIDUAL_INNER_RACE, "diagnoser": topics.FAULT_STATE}
 STARTED = re.compile(r"\] (started|restarted) (\w+) \(pid (\d+)\)")
 STABLE_S = 3.0  # s of fault_state stamps that must follow the recovery, all correct
 RECOVERY_TIMEOUT_S = 60.0  # s after the restarted node's output is back
+
+
 @dataclass
 class Arrivals:
     """Messages of one topic with their arrival time (monotonic s)."""
@@ -64,6 +69,11 @@ class Recovery:
     stable: list  # fault_state msgs received in STABLE_S s of stamps after it (after the output if none)
     latest: object  # the last fault_state the listener had when the late participant started
     late: list  # what a participant started after the recovery received
+
+
+@dataclass
+class GraphRun:
+    recoveries: dict  # victim -> Recovery, in the order killed
     exit_line: str
     stop_output: str  # what bearing-graph printed from the Ctrl-C on (a node's stall dump, if any)
 
@@ -105,10 +115,54 @@ def late_participant_states(domain_id: int, timeout: float = 20.0) -> list:
     return got
 
 
-@pytest.fixture(scope="module", params=list(OUTPUT))
-def recovery(request, tmp_path_factory) -> Recovery:
-    victim = request.param
-    tmp = tmp_path_factory.mktemp(victim)
+def recover(graph, starter, arrivals: dict, victim: str) -> Recovery:
+    """Kill ``victim`` with SIGKILL and wait until bearing-graph restarted it, its output is back, and a
+    correct fault_state (or any, if none comes) followed by :data:`STABLE_S` s of decisions."""
+    states = arrivals["diagnoser"]
+    seen = len(starter.lines)
+    old_pid = pids(starter.lines)[victim]
+    killed = time.monotonic()
+    os.kill(old_pid, signal.SIGKILL)
+    graph.wait_until(lambda: pids(starter.lines)[victim] != old_pid, 30.0, f"{victim} restarted")
+    restarted = time.monotonic()
+    new_pid = pids(starter.lines)[victim]
+    graph.wait_until(lambda: arrivals[victim].since(restarted), 120.0, f"the restarted {victim}'s output")
+    output_at = arrivals[victim].since(restarted)[0][0]
+
+    def correct_after_output():
+        return [(at, m) for at, m in states.since(output_at) if m.state == FaultState.OUTER_RACE]
+
+    try:  # a wrong diagnoser must not stop the other checks: the correctness tests report it
+        graph.wait_until(correct_after_output, RECOVERY_TIMEOUT_S, "a correct fault_state after the restart")
+        state_at, first = correct_after_output()[0]
+    except AssertionError:
+        graph.wait_until(lambda: states.since(output_at), 30.0, "a fault_state after the restart")
+        state_at, first = states.since(output_at)[0]
+    graph.wait_until(lambda: stamp(states.items[-1][1]) >= stamp(first) + STABLE_S, 60.0,
+                     f"{STABLE_S} s of decisions after the recovery")
+    recovered = first.state == FaultState.OUTER_RACE
+    latest = states.items[-1][1]
+    late = late_participant_states(graph.domain_id)
+    assert starter.returncode is None, graph.output()
+    result = Recovery(
+        victim, list(states.items), [m.group(2) for m in map(STARTED.search, starter.lines[seen:])
+                                     if m and m.group(1) == "restarted"],
+        old_pid, new_pid, restarted - killed, output_at - killed, state_at - killed if recovered else None,
+        [m for _, m in states.since(state_at)], latest, late)
+    print(f"\n{victim} killed: restarted after {result.kill_to_restart:.1f} s, its output back after "
+          f"{result.kill_to_output:.1f} s, first correct fault_state after "
+          f"{'(none)' if result.kill_to_state is None else f'{result.kill_to_state:.1f} s'}; "
+          "fault_state changes after the kill (received s after the kill, stamp s, state): "
+          + ", ".join(f"{at - killed:.1f} {stamp(m):.2f} {FaultState(m.state).name}"
+                      + (f" ({m.detail})" if m.detail else "") for at, m in changes(states.since(killed))))
+    return result
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory) -> GraphRun:
+    """One run of the graph; each node of :data:`ORDER` killed in turn once the graph has recovered
+    from the previous kill; then a Ctrl-C."""
+    tmp = tmp_path_factory.mktemp("restart")
     config = yaml.safe_load(params_file().read_text())
     config["simulator"]["ros__parameters"].update(scenario="", schedule=SCHEDULE)
     (tmp / "params.yaml").write_text(yaml.safe_dump(config))
@@ -123,62 +177,34 @@ def recovery(request, tmp_path_factory) -> Recovery:
             "--params", str(tmp / "params.yaml"), "--out", str(tmp / "out"), "--restart-delay", "1"])
         graph.wait_until(lambda: states.since(0.0), 180.0, "the first fault_state")
         graph.wait_until(lambda: stamp(states.items[-1][1]) >= 1.0, 60.0, "1 s of decisions")
-
-        old_pid = pids(starter.lines)[victim]
-        killed = time.monotonic()
-        os.kill(old_pid, signal.SIGKILL)
-        graph.wait_until(lambda: pids(starter.lines)[victim] != old_pid, 30.0, f"{victim} restarted")
-        restarted = time.monotonic()
-        new_pid = pids(starter.lines)[victim]
-        graph.wait_until(lambda: arrivals[victim].since(restarted), 120.0, f"the restarted {victim}'s output")
-        output_at = arrivals[victim].since(restarted)[0][0]
-
-        def correct_after_output():
-            return [(at, m) for at, m in states.since(output_at) if m.state == FaultState.OUTER_RACE]
-
-        try:  # a wrong diagnoser must not stop the other checks: the correctness tests report it
-            graph.wait_until(correct_after_output, RECOVERY_TIMEOUT_S, "a correct fault_state after the restart")
-            state_at, first = correct_after_output()[0]
-        except AssertionError:
-            graph.wait_until(lambda: states.since(output_at), 30.0, "a fault_state after the restart")
-            state_at, first = states.since(output_at)[0]
-        graph.wait_until(lambda: stamp(states.items[-1][1]) >= stamp(first) + STABLE_S, 60.0,
-                         f"{STABLE_S} s of decisions after the recovery")
-        stable = [m for _, m in states.since(state_at)]
-        recovered = first.state == FaultState.OUTER_RACE
-        latest = states.items[-1][1]
-        late = late_participant_states(graph.domain_id)
-        assert starter.returncode is None, graph.output()
+        recoveries = {victim: recover(graph, starter, arrivals, victim) for victim in ORDER}
         seen = len(starter.lines)
         os.kill(starter.process.pid, signal.SIGINT)
         graph.wait_until(lambda: starter.returncode is not None, 60.0, "bearing-graph to stop")
-        result = Recovery(
-            victim, list(states.items), [m.group(2) for m in map(STARTED.search, starter.lines)
-                                         if m and m.group(1) == "restarted"],
-            old_pid, new_pid, restarted - killed, output_at - killed, state_at - killed if recovered else None,
-            stable, latest, late,
-            next((line for line in starter.lines if "exit codes:" in line), ""), "\n".join(starter.lines[seen:]))
-        print(f"\n{victim} killed: restarted after {result.kill_to_restart:.1f} s, its output back after "
-              f"{result.kill_to_output:.1f} s, first correct fault_state after "
-              f"{'(none)' if result.kill_to_state is None else f'{result.kill_to_state:.1f} s'}; "
-              "fault_state changes after the kill (received s after the kill, stamp s, state): "
-              + ", ".join(f"{at - killed:.1f} {stamp(m):.2f} {FaultState(m.state).name}"
-                          + (f" ({m.detail})" if m.detail else "") for at, m in changes(states.since(killed))))
-        yield result
+        yield GraphRun(recoveries, next((line for line in starter.lines if "exit codes:" in line), ""),
+                       "\n".join(starter.lines[seen:]))
     finally:
         graph.close()
 
 
+@pytest.fixture(params=ORDER)
+def recovery(run, request) -> Recovery:
+    return run.recoveries[request.param]
+
+
+def test_ctrl_c_stops_every_node_cleanly_after_the_restarts(run):
+    assert run.exit_line.endswith("exit codes: simulator 0, or_observer 0, ir_observer 0, diagnoser 0"), \
+        run.stop_output
+
+
 def test_killed_node_is_restarted_and_the_graph_keeps_running(recovery):
     """Only the killed node is restarted, after the delay; a correct state follows from its output
-    (the fixture waited for it); Ctrl-C then stops every node cleanly."""
+    (the fixture waited for it)."""
     assert recovery.restarted == [recovery.victim] and recovery.new_pid != recovery.old_pid
     assert 1.0 <= recovery.kill_to_restart < 5.0
     assert recovery.kill_to_restart < recovery.kill_to_output
     if recovery.victim == "simulator":  # a new stream: stamps back to 0, decided as such
         assert stamp(recovery.stable[0]) < 5.0
-    assert recovery.exit_line.endswith("exit codes: simulator 0, or_observer 0, ir_observer 0, diagnoser 0"), \
-        recovery.stop_output
 
 
 def test_fault_states_after_recovery_are_correct(recovery):
