@@ -45,6 +45,14 @@ LOG = logging.getLogger(__name__)
 #: Shaft speed (rev/min) the observers assume while none is known: the observer node's default.
 NOMINAL_RPM = 1800.0
 
+#: Longest stretch (s) of one stream handed to a decision that reads every stream (the folding
+#: decision) before the other streams' same samples: half its largest lag
+#: (:attr:`.fold.settings.FoldSettings.max_lag_s`, 1 s). Live, each observer's chunk arrives within
+#: a chunk of the other's; offline a chunk is 10 s, and handed whole, stream after stream, the
+#: first ran 10 s ahead: the decision took the second for absent and decided without it (an
+#: inner-race simulation called OUTER_RACE for its first 9 s).
+INTERLEAVE_S = 0.5
+
 
 def choose_model_set(source: str, sample_rate: float, bearing: Bearing, requested: str | None = None) -> ModelSet:
     """The model set for a recording: ``requested`` if given, else the registry's rule for its source,
@@ -115,6 +123,10 @@ class MonitorPipeline:
         if rpm_tolerance is not None:
             values["rpm_tolerance"] = float(rpm_tolerance)
         self.diagnoser = DiagnoserSession(values, _log, bearing=bearing, config=config, keep_history=True)
+        #: s of one stream per hand-over (:data:`INTERLEAVE_S`) for a decision that reads every stream and
+        #: chunks that are a stream; None: whole chunks (a snapshot sensor's chunk is a waveform of its own)
+        self._interleave = INTERLEAVE_S if config.front_end.EVERY_STREAM and values["input_mode"] != "snapshot" \
+            else None
         self.kept = {h: {"residual": [], "estimate": [], "impulse_train": []} for h in self.observers} \
             if keep_streams else {}
         self.shaft_speed = None if shaft_speed is None else np.asarray(shaft_speed, dtype=float)
@@ -136,6 +148,7 @@ class MonitorPipeline:
             self.diagnoser.speed_samples(stamp, sample_rate, w)
             for observer in self.observers.values():
                 observer.on_speed(float(w[0]))
+        outputs = {}
         for h in self.streams:
             if h in self.observers:
                 out = self.observers[h].on_chunk(stamp, first_index, sample_rate, source, samples)
@@ -147,10 +160,17 @@ class MonitorPipeline:
                 for key, parts in self.kept.get(h, {}).items():
                     part = getattr(out, key)  # None without a model: no estimate (0), no train
                     parts.append(np.zeros_like(out.residual) if part is None else part)
-                self._decide(h, stamp, first_index, sample_rate, out.residual, out.estimate, out.impulse_train,
-                             out.fault_frequency, out.model_set)
+                outputs[h] = (out.residual, out.estimate, out.impulse_train, out.fault_frequency, out.model_set)
             else:
-                self._decide(h, stamp, first_index, sample_rate, samples, None, None, self.fault_hz[h], self.model_set)
+                outputs[h] = (samples, None, None, self.fault_hz[h], self.model_set)
+        piece = max(1, int(self._interleave * sample_rate)) if self._interleave and len(outputs) > 1 \
+            else max(1, len(samples))
+        for i0 in range(0, len(samples), piece):
+            i1 = i0 + piece
+            for h, (y, estimate, train, fault_hz, name) in outputs.items():
+                self._decide(h, stamp + i0 / sample_rate, first_index + i0, sample_rate, y[i0:i1],
+                             None if estimate is None else estimate[i0:i1], None if train is None else train[i0:i1],
+                             fault_hz, name)
 
     def _decide(self, h: FaultState, stamp: float, first_index: int, sample_rate: float, residual, estimate, train,
                 fault_hz: float, model_set: str) -> None:
