@@ -35,9 +35,7 @@ GRAPH_CLI = [sys.executable, "-m", "bearing_bringup.graph_cli"]
 FLEET_CLI = [sys.executable, "-m", "bearing_fleet.fleet_cli"]
 EXPECTED = {"motor_1": FaultState.OUTER_RACE, "motor_2": FaultState.INNER_RACE, "motor_3": FaultState.NORMAL}
 SCENARIO = {"motor_1": "or", "motor_2": "ir", "motor_3": "normal"}
-# s of signal: room for the restart of a process (start-up up to 10 s) before the end. Not longer: at
-# 25.3 s of the simulator's inner-race signal the decision calls OUTER_RACE for two windows (offline
-# too, bearing-diagnose on the same signal), which is the decision's matter, not the fleet's.
+# s of signal: room for the restart of a process (start-up up to 10 s) before the end, and no longer
 SEGMENT_S = 24.0
 LEVEL = {FaultState.NORMAL: 0, FaultState.OUTER_RACE: 2, FaultState.INNER_RACE: 2}  # OK, ERROR
 VICTIM = "observers_1"  # motor_1's and motor_2's observers
