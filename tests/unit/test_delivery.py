@@ -2,7 +2,7 @@
 
 import pytest
 
-from bearing_common import delivery
+from bearing_common import delivery, topics
 
 
 class FakePublisher:
@@ -23,14 +23,14 @@ def fast(monkeypatch):
 
 
 def test_waits_for_every_publisher_until_acknowledged(fast):
-    pubs = [FakePublisher("vibration/drive_end", 3), FakePublisher("shaft_speed", 1)]
+    pubs = [FakePublisher(topics.VIBRATION.name, 3), FakePublisher(topics.SHAFT_SPEED.name, 1)]
     assert delivery.wait_acknowledged(pubs, timeout=100.0) == []
     assert [p.calls for p in pubs] == [3, 1]  # an acknowledged publisher is not asked again
 
 
 def test_names_what_is_not_acknowledged_at_the_timeout(fast):
-    pubs = [FakePublisher("vibration/drive_end", None), FakePublisher("sim/truth", 2)]
-    assert delivery.wait_acknowledged(pubs, timeout=4.0) == ["vibration/drive_end"]
+    pubs = [FakePublisher(topics.VIBRATION.name, None), FakePublisher(topics.TRUTH.name, 2)]
+    assert delivery.wait_acknowledged(pubs, timeout=4.0) == [topics.VIBRATION.name]
     assert pubs[0].calls == 4  # one poll per second of the fake clock until the deadline
 
 
@@ -43,6 +43,6 @@ def test_a_stop_request_ends_the_wait():
             self.looks += 1
             return self.looks > 2
 
-    pub = FakePublisher("unbalance", None)
-    assert delivery.wait_acknowledged([pub], timeout=3600.0, stop=Stop()) == ["unbalance"]
+    pub = FakePublisher(topics.UNBALANCE.name, None)
+    assert delivery.wait_acknowledged([pub], timeout=3600.0, stop=Stop()) == [topics.UNBALANCE.name]
     assert pub.calls == 2
