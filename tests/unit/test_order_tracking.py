@@ -161,6 +161,23 @@ def test_tacho_less_speed_says_when_no_shaft_comb_carries_its_track(signal):
     assert track.unsupported().startswith("no shaft comb to track the speed on")
 
 
+def test_tacho_less_speed_refuses_a_track_that_leaves_the_shaft_halfway():
+    """A weak 1× line under a strong outer-race comb along a +20 % ramp: the track holds the shaft for 4.5 s
+    (its frames show the 1× line), then follows the comb at 0.90× the shaft (lines at its orders 4 and 8
+    only), 10 % off (p95). Half its frames show the shaft, but not over the last 4.5 s: refused."""
+    profile = SpeedProfile.parse("0:1620,10:1980")
+    x, t, fs = _chirp(profile, [])
+    phi = profile.angle(t)
+    x = 0.1 * np.cos(phi) + sum(3.0 * np.cos(k * 3.5848 * phi) for k in (1, 2, 3))
+    x = x + np.random.default_rng(1).standard_normal(t.size)
+    track = track_speed(x, fs, 1530.0, 2070.0, max_rate=0.044)
+    err = np.abs(track.speed / profile.omega(t) - 1)[(t > 0.5) & (t < 9.5)]
+    assert np.percentile(err, 95) > 0.05
+    assert 0.3 < track.evidenced() < 0.7
+    assert track.longest_unsupported() > 2 * track.evidence_frame
+    assert "none over 4.5 s of the record" in track.unsupported()
+
+
 def test_a_frame_shows_the_shaft_by_lines_at_orders_without_a_common_factor():
     strong, weak = 2.0 * LINE_EVIDENCE, 0.5 * LINE_EVIDENCE
     ratios = np.full((5, 8), weak)

@@ -51,10 +51,11 @@ offline, a recording without a measured speed may take :func:`track_speed`'s
      when the orders whose line exceeds :data:`LINE_EVIDENCE` (11.6×: noise exceeds it in one of
      3 bins with probability 1e-3) have no common factor (:func:`shows_the_shaft`): the 1× line
      alone will do, 3× and 4× will, 4× and 8× (a foreign comb at 4× the track) will not. A track
-     of which fewer than :data:`TRACK_LEAST_EVIDENCED` of the frames show the shaft is refused
-     (:meth:`SpeedTrack.unsupported` says why; ``bearing-diagnose --track-speed`` then does not
-     diagnose the record): the path through frames without a shaft line follows noise and drifts
-     through the told range.
+     is refused when more than one frame's length lies between frames that show the shaft (the
+     first and last frames' centres counting as ends): some stretch of it then lies in no frame
+     with evidence for it (:meth:`SpeedTrack.unsupported` says why; ``bearing-diagnose
+     --track-speed`` then does not diagnose the record). The path through frames without a shaft
+     line follows noise and drifts through the told range, or follows another line family.
 
   Measured accuracy (``python -m benchmarks.speed_tracking``): on a synthetic harmonic
   series along a ±20 % ramp 0.04 % RMS; on the warped development recordings see the
@@ -62,9 +63,12 @@ offline, a recording without a measured speed may take :func:`track_speed`'s
   the only shaft-synchronous excitation (a tiny unbalance) makes no line above the sensor
   noise or the impacts' floor, the path followed single noise bins at scattered orders
   (one per frame, no family), drifting to the told range's edges, 22-23 % off; 0-6 % of its
-  frames show the shaft there and the track is refused (the noise-free healthy ramp, whose
-  1× line stands 10⁴-10⁵× over its floor: 100 %, 0.42 % off). Every warped development ramp
-  within 1 % shows the shaft in 40-100 % of its frames (the simulator gives its tachometer).
+  2 s frames show the shaft there, none over 7.5 s of the record, and the track is refused
+  (the noise-free healthy ramp, whose 1× line stands 10⁴-10⁵× over its floor: every frame,
+  0.42 % off, used). On every warped development ramp within 1 % the frames that show the
+  shaft lie at most 1.54 s apart (none refused). A track that leaves the shaft halfway (a weak
+  1× line under an outer-race comb: the second half at 0.90× the shaft, 10 % off) is refused
+  though half its frames show the shaft (the simulator gives its tachometer).
 
 Angles in rad, speeds in rad/s, times in s; orders are multiples of the shaft speed.
 """
@@ -98,9 +102,6 @@ COARSE_MIN_REVS = 12
 #: ln 2 times its mean, so it exceeds r times the median with probability 2^−r).
 LINE_EVIDENCE = math.log2(3.0 / 1e-3)
 
-#: Least share of the refinement's frames that must show the shaft for a track to be used
-#: (:meth:`SpeedTrack.unsupported`): noise alone gave 0-6 %, the warped development ramps 40-100 %.
-TRACK_LEAST_EVIDENCED = 0.25
 
 
 @dataclass
@@ -161,14 +162,16 @@ def order_spectrum(samples, samples_per_rev: int):
 class SpeedTrack:
     """Shaft speed estimated from the vibration, per input sample (rad/s), and the evidence for it.
 
-    ``evidence_times`` (s): the centres of the last refinement's frames; ``line_ratio`` (frames, K): in
-    each, the power at shaft order k of the track (the corrected comb's k·c, the largest of ±1 bin) over
-    its running median. Empty when the track was not refined (``refine=0``): no evidence.
+    ``evidence_times`` (s): the centres of the last refinement's frames, ``evidence_frame`` (s) their
+    length; ``line_ratio`` (frames, K): in each, the power at shaft order k of the track (the corrected
+    comb's k·c, the largest of ±1 bin) over its running median. Empty when the track was not refined
+    (``refine=0``): no evidence.
     """
 
     speed: np.ndarray
     sample_rate: float
     evidence_times: np.ndarray = field(default_factory=lambda: np.empty(0))
+    evidence_frame: float = 0.0
     line_ratio: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
 
     @property
@@ -184,15 +187,26 @@ class SpeedTrack:
         """The share of the refinement's frames that show the shaft (:func:`shows_the_shaft`); 0 unrefined."""
         return float(np.mean(shows_the_shaft(self.line_ratio))) if self.line_ratio.size else 0.0
 
-    def unsupported(self, least: float = TRACK_LEAST_EVIDENCED) -> str | None:
-        """Why the track must not be used (one line), or None when at least ``least`` of its frames show
-        the shaft (module docstring)."""
-        share = self.evidenced()
-        if share >= least:
+    def longest_unsupported(self) -> float:
+        """The longest stretch (s) between frames that show the shaft, the first and last frames' centres
+        counting as ends; inf when none does."""
+        shown = self.evidence_times[shows_the_shaft(self.line_ratio)] if self.line_ratio.size else []
+        if len(shown) == 0:
+            return math.inf
+        return float(np.max(np.diff(np.r_[self.evidence_times[0], shown, self.evidence_times[-1]])))
+
+    def unsupported(self) -> str | None:
+        """Why the track must not be used (one line), or None when no stretch longer than one frame lies
+        between frames that show the shaft (module docstring)."""
+        gap = self.longest_unsupported()
+        if gap <= self.evidence_frame:
             return None
-        return (f"no shaft comb to track the speed on: {100 * share:.0f} % of the tracker's frames show one "
-                f"(lines at shaft orders without a common factor, each over {LINE_EVIDENCE:.1f}x its floor; "
-                f"needs {100 * least:.0f} %); measure the speed (a tachometer or a speed channel)")
+        shown = ("none of the tracker's" if math.isinf(gap) else
+                 f"{100 * self.evidenced():.0f} % of the tracker's")
+        where = "" if math.isinf(gap) else f", none over {gap:.1f} s of the record"
+        return (f"no shaft comb to track the speed on: {shown} {self.evidence_frame:.1f} s frames show one (lines at "
+                f"shaft orders without a common factor, each over {LINE_EVIDENCE:.1f}x its floor){where}; measure "
+                "the speed (a tachometer or a speed channel)")
 
 
 def shows_the_shaft(line_ratio: np.ndarray, level: float | None = None) -> np.ndarray:
@@ -321,7 +335,7 @@ def _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear):
     line power at orders k·c in the angle-domain frames, the corrected speed kept within ``bounds``
     (rad/s); the new track is c times the frames' mean speeds, linear between them (``linear``), or
     the per-sample speed times c interpolated. Returns :class:`SpeedTrack`'s fields: the new track, ``fs``,
-    the frames' centres (s) and the chosen comb's lines over their floor (frames, K)."""
+    the frames' centres and length (s) and the chosen comb's lines over their floor (frames, K)."""
     a = resample_to_angle(x, fs, angle_from_speed(speed, fs), TRACK_SAMPLES_PER_REV)
     rev_s = 2.0 * math.pi / float(np.mean(speed))
     revs = min(max(_REFINE_REVS, int(round(_REFINE_FRAME / rev_s))), a.samples.size // TRACK_SAMPLES_PER_REV)
@@ -344,8 +358,8 @@ def _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear):
     t, knots, frame_s = np.arange(x.size) / fs, 0.5 * (t0 + t1), float(np.median(t1 - t0))
     lines = _comb_line(ratio, c / d_order, harmonics)
     if linear:
-        return _piecewise_linear(t, knots, c * mean_speed, frame_s), fs, knots, lines
-    return speed * _piecewise_linear(t, knots, c, frame_s), fs, knots, lines
+        return _piecewise_linear(t, knots, c * mean_speed, frame_s), fs, knots, frame_s, lines
+    return speed * _piecewise_linear(t, knots, c, frame_s), fs, knots, frame_s, lines
 
 
 def _comb_line(ratio: np.ndarray, rates: np.ndarray, harmonics: int) -> np.ndarray:
