@@ -17,7 +17,9 @@ and on ramps, for the decision with a tachometer, tacho-less, and the constant-s
 * ``tacho-less``: the speed per sample is tracked from the vibration
   (:func:`bearing_diagnoser.order_tracking.track_speed`, told the nominal speed ± (half the ramp +
   5 %) and twice the ramp's rate as :mod:`benchmarks.speed_tracking` does), then followed as a measured
-  one; the table gives the tracker's error (95th percentile per sample) against the tachometer;
+  one, unless too few of its frames show a shaft comb (``SpeedTrack.unsupported``: then not decided, as
+  ``bearing-diagnose --track-speed``); the table gives the tracker's error (95th percentile per sample)
+  against the tachometer;
 * ``constant``: the constant-speed decision, told the nominal (mean) speed to the record's own
   tolerance, no speed series.
 
@@ -170,11 +172,13 @@ def run(signal: Signal, level: float, profile_name: str, mode: str) -> Run:
         rec.set_shaft_speed(w, "tachometer")
     elif mode == "tacho-less":
         if profile_name == "const":
-            tracked = track_speed(x, fs, 0.95 * rpm, 1.05 * rpm).speed
+            track = track_speed(x, fs, 0.95 * rpm, 1.05 * rpm)
         else:
-            tracked = track_speed(x, fs, *search_range(rpm, profile_name), max_rate=rate_limit(profile_name)).speed
-        p95 = float(np.percentile(errors(tracked, w, fs), 95))
-        rec.set_shaft_speed(tracked, "tracked")
+            track = track_speed(x, fs, *search_range(rpm, profile_name), max_rate=rate_limit(profile_name))
+        p95 = float(np.percentile(errors(track.speed, w, fs), 95))
+        if track.unsupported() is not None:  # not decided on, as bearing-diagnose --track-speed
+            return Run(False, [FaultState.UNKNOWN], 0, p95)
+        rec.set_shaft_speed(track.speed, "tracked")
     model_set = "none" if not signal.warped else None
     res = diagnose_recording(rec, model_set=model_set, bearing=signal.bearing)
     states = [s.state for s in res.segments]

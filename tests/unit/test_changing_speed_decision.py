@@ -156,6 +156,21 @@ def test_bearing_diagnose_tracks_a_changing_speed_from_the_vibration(tmp_path, c
         diagnose([str(path), "--track-speed", "900:2200"])  # wider than an octave
 
 
+def test_bearing_diagnose_refuses_a_tracked_speed_no_shaft_line_carries(tmp_path, capsys):
+    """White noise (no shaft line) told a speed range: the tracker's path, 22 % off on such a ramp, is not
+    decided on; the record is one UNKNOWN segment, not diagnosed for the speed, with the tracker's reason."""
+    path = tmp_path / "no_shaft.npz"
+    np.savez(path, accel=np.random.default_rng(1).standard_normal(int(10 * RATE)), sample_rate=RATE)
+    rc = diagnose([str(path), "--track-speed", "1530:2070:4.4", "--bearing", "6205", "--model-set", "none",
+                   "--json"])
+    out = capsys.readouterr()
+    assert rc == 0, out.err
+    assert "the tracked shaft speed is not used: no shaft comb to track the speed on" in out.err
+    [segment] = [json.loads(line) for line in out.out.splitlines()]
+    assert segment["state"] == "unknown" and segment["not_diagnosed"]["kind"] == "speed"
+    assert segment["not_diagnosed"]["reason"].startswith("no shaft comb to track the speed on")
+
+
 def test_track_speed_takes_a_range_and_the_largest_rate_of_change():
     assert _speed_range("1500:2200") == (1500.0, 2200.0, 0.15)  # the tracker's default, 15 %/s
     assert _speed_range("1500:2200:2.5") == (1500.0, 2200.0, 0.025)

@@ -7,7 +7,13 @@ import numpy as np
 import pytest
 
 from bearing_common.shaft_angle import RPM_TO_RAD_S, SpeedProfile, angle_from_speed
-from bearing_diagnoser.order_tracking import order_spectrum, resample_to_angle, track_speed
+from bearing_diagnoser.order_tracking import (
+    LINE_EVIDENCE,
+    order_spectrum,
+    resample_to_angle,
+    shows_the_shaft,
+    track_speed,
+)
 from bearing_recordings.resampling import decimate, sample_at
 
 
@@ -95,8 +101,10 @@ def test_tacho_less_speed_follows_a_ramp_of_shaft_harmonics(spec):
     x, t, fs = _chirp(profile, range(1, 9))
     x = x + np.random.default_rng(0).standard_normal(t.size)
     inner = (t > 0.5) & (t < 9.5)
-    err = np.abs(track_speed(x, fs, 1500.0, 2100.0).speed / profile.omega(t) - 1)[inner]
+    track = track_speed(x, fs, 1500.0, 2100.0)
+    err = np.abs(track.speed / profile.omega(t) - 1)[inner]
     assert np.percentile(err, 95) < 3e-3
+    assert track.evidenced() == 1.0 and track.unsupported() is None
     coarse = np.abs(track_speed(x, fs, 1500.0, 2100.0, refine=0).speed / profile.omega(t) - 1)[inner]
     assert np.percentile(coarse, 95) < 1e-2
 
@@ -108,7 +116,9 @@ def test_tacho_less_speed_is_not_fooled_by_a_stronger_non_shaft_comb():
     phi = profile.angle(t)
     x = sum(0.3 * np.cos(k * phi) for k in (1, 2, 3)) + sum(3 * np.cos(k * 3.5848 * phi) for k in (1, 2, 3))
     x = x + np.random.default_rng(2).standard_normal(t.size)
-    speed = track_speed(x, 12000.0, 1500.0, 2100.0).speed
+    track = track_speed(x, 12000.0, 1500.0, 2100.0)
+    speed = track.speed
+    assert track.unsupported() is None
     np.testing.assert_allclose(np.median(speed), 1800 * RPM_TO_RAD_S, rtol=2e-3)
     assert angle_from_speed(speed, 12000.0)[-1] == pytest.approx(phi[-1], rel=3e-3)
 
@@ -129,6 +139,53 @@ def test_tacho_less_speed_does_not_take_a_strong_shaft_lines_neighbour_for_the_s
     assert np.percentile(coarse[inner], 95) > 0.05  # the coarse stage alone is fooled: what the refinement undoes
     err = np.abs(track_speed(x, 12000.0, 765.0, 1035.0, max_rate=0.044).speed / profile.omega(t) - 1)[inner]
     assert np.percentile(err, 95) < 0.01
+
+
+@pytest.mark.parametrize("signal", ["noise", "outer-race comb"])
+def test_tacho_less_speed_says_when_no_shaft_comb_carries_its_track(signal):
+    """No shaft line along a +20 % ramp, told 1530-2070 rev/min (as the simulator's noisy and outer-race
+    ramps): white noise alone, or an outer-race comb (3.5848×, 2× and 3× it) in it. The track is 15 % and
+    10 % off (p95; before, nothing said so); none of its frames shows a shaft comb (noise: no line of the
+    chosen comb over the level; the outer-race comb taken at 0.90× the shaft: lines only at its orders 4
+    and 8), and it says so."""
+    profile = SpeedProfile.parse("0:1620,10:1980")
+    x, t, fs = _chirp(profile, [])
+    phi = profile.angle(t)
+    if signal != "noise":
+        x = sum(np.cos(k * 3.5848 * phi) for k in (1, 2, 3))
+    x = x + np.random.default_rng(1).standard_normal(t.size)
+    track = track_speed(x, fs, 1530.0, 2070.0, max_rate=0.044)
+    err = np.abs(track.speed / profile.omega(t) - 1)[(t > 0.5) & (t < 9.5)]
+    assert np.percentile(err, 95) > 0.05  # what it would hand the decision
+    assert track.evidenced() < 0.1
+    assert track.unsupported().startswith("no shaft comb to track the speed on")
+
+
+def test_tacho_less_speed_refuses_a_track_that_leaves_the_shaft_halfway():
+    """A weak 1× line under a strong outer-race comb along a +20 % ramp: the track holds the shaft for 4.5 s
+    (its frames show the 1× line), then follows the comb at 0.90× the shaft (lines at its orders 4 and 8
+    only), 10 % off (p95). Half its frames show the shaft, but not over the last 4.5 s: refused."""
+    profile = SpeedProfile.parse("0:1620,10:1980")
+    x, t, fs = _chirp(profile, [])
+    phi = profile.angle(t)
+    x = 0.1 * np.cos(phi) + sum(3.0 * np.cos(k * 3.5848 * phi) for k in (1, 2, 3))
+    x = x + np.random.default_rng(1).standard_normal(t.size)
+    track = track_speed(x, fs, 1530.0, 2070.0, max_rate=0.044)
+    err = np.abs(track.speed / profile.omega(t) - 1)[(t > 0.5) & (t < 9.5)]
+    assert np.percentile(err, 95) > 0.05
+    assert 0.3 < track.evidenced() < 0.7
+    assert track.longest_unsupported() > 2 * track.evidence_frame
+    assert "none over 4.5 s of the record" in track.unsupported()
+
+
+def test_a_frame_shows_the_shaft_by_lines_at_orders_without_a_common_factor():
+    strong, weak = 2.0 * LINE_EVIDENCE, 0.5 * LINE_EVIDENCE
+    ratios = np.full((5, 8), weak)
+    ratios[0, 0] = strong  # the 1x line alone
+    ratios[1, [2, 3]] = strong  # 3x and 4x
+    ratios[2, [2, 5]] = strong  # 3x and 6x: a family at 3x the track
+    ratios[3, 1] = strong  # 2x alone
+    np.testing.assert_array_equal(shows_the_shaft(ratios), [True, True, False, False, False])
 
 
 def test_tacho_less_speed_refuses_what_it_cannot_use():

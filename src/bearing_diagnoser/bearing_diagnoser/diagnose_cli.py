@@ -90,8 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--track-speed", metavar="LO:HI[:RATE]", type=_speed_range,
                    help="no measured speed, but the speed changes within LO-HI rev/min (narrower than an octave), "
                         "by at most RATE %% per second (default 15: a run-up from half speed in 10 s; a drive's "
-                        "ramp time gives it): track it from the vibration (the shaft's harmonics) and follow it "
-                        "(docs/changing-speed.md)")
+                        "ramp time gives it): track it from the vibration (the shaft's harmonics) and follow it; "
+                        "where too few of the tracker's frames show a shaft comb, the record is not diagnosed "
+                        "(kind speed) (docs/changing-speed.md)")
     p.add_argument("--model-set", help="sim_48k, sim_12k, cwru_de_6205 or none (default: from the input)")
     p.add_argument("--method", choices=("model", "envelope"), default="model",
                    help="model: observers + envelope-spectrum decision (default); envelope: textbook reference")

@@ -46,10 +46,29 @@ offline, a recording without a measured speed may take :func:`track_speed`'s
      mains' 50 and 100 Hz, which the warp made shaft-synchronous; both tracked 7-16 % off,
      within 0.75 % since).
 
+  3. *evidence*: in each frame of the last refinement, the chosen comb's line at each order k
+     (the largest of ±1 bin about k·c) over its running median. A frame **shows the shaft**
+     when the orders whose line exceeds :data:`LINE_EVIDENCE` (11.6×: noise exceeds it in one of
+     3 bins with probability 1e-3) have no common factor (:func:`shows_the_shaft`): the 1× line
+     alone will do, 3× and 4× will, 4× and 8× (a foreign comb at 4× the track) will not. A track
+     is refused when more than one frame's length lies between frames that show the shaft (the
+     first and last frames' centres counting as ends): some stretch of it then lies in no frame
+     with evidence for it (:meth:`SpeedTrack.unsupported` says why; ``bearing-diagnose
+     --track-speed`` then does not diagnose the record). The path through frames without a shaft
+     line follows noise and drifts through the told range, or follows another line family.
+
   Measured accuracy (``python -m benchmarks.speed_tracking``): on a synthetic harmonic
   series along a ±20 % ramp 0.04 % RMS; on the warped development recordings see the
-  README. It needs shaft lines: on the simulator's output, whose only shaft-synchronous
-  excitation is a tiny unbalance, it does not work (the simulator gives its tachometer).
+  README. It needs shaft lines: on the simulator's noisy and outer-race +20 % ramps, where
+  the only shaft-synchronous excitation (a tiny unbalance) makes no line above the sensor
+  noise or the impacts' floor, the path followed single noise bins at scattered orders
+  (one per frame, no family), drifting to the told range's edges, 22-23 % off; 0-6 % of its
+  2 s frames show the shaft there, none over 7.5 s of the record, and the track is refused
+  (the noise-free healthy ramp, whose 1× line stands 10⁴-10⁵× over its floor: every frame,
+  0.42 % off, used). On every warped development ramp within 1 % the frames that show the
+  shaft lie at most 1.54 s apart (none refused). A track that leaves the shaft halfway (a weak
+  1× line under an outer-race comb: the second half at 0.90× the shaft, 10 % off) is refused
+  though half its frames show the shaft (the simulator gives its tachometer).
 
 Angles in rad, speeds in rad/s, times in s; orders are multiples of the shaft speed.
 """
@@ -57,7 +76,7 @@ Angles in rad, speeds in rad/s, times in s; orders are multiples of the shaft sp
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
@@ -77,6 +96,12 @@ LINE_LEVEL = 3.0
 
 #: Shortest coarse frame, in revolutions at the lowest speed of the range (bins ≤ 1/12 of the 1× rate).
 COARSE_MIN_REVS = 12
+
+#: A shaft line counts as evidence for the track above this multiple of its floor: noise exceeds it in one of
+#: the 3 bins searched with probability 3·2^−level = 1e-3 (a noise bin's power is exponential, its median
+#: ln 2 times its mean, so it exceeds r times the median with probability 2^−r).
+LINE_EVIDENCE = math.log2(3.0 / 1e-3)
+
 
 
 @dataclass
@@ -135,10 +160,19 @@ def order_spectrum(samples, samples_per_rev: int):
 
 @dataclass
 class SpeedTrack:
-    """Shaft speed estimated from the vibration, per input sample (rad/s)."""
+    """Shaft speed estimated from the vibration, per input sample (rad/s), and the evidence for it.
+
+    ``evidence_times`` (s): the centres of the last refinement's frames, ``evidence_frame`` (s) their
+    length; ``line_ratio`` (frames, K): in each, the power at shaft order k of the track (the corrected
+    comb's k·c, the largest of ±1 bin) over its running median. Empty when the track was not refined
+    (``refine=0``): no evidence.
+    """
 
     speed: np.ndarray
     sample_rate: float
+    evidence_times: np.ndarray = field(default_factory=lambda: np.empty(0))
+    evidence_frame: float = 0.0
+    line_ratio: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
 
     @property
     def rpm(self) -> np.ndarray:
@@ -148,6 +182,41 @@ class SpeedTrack:
     def angle(self) -> np.ndarray:
         """Shaft angle per sample (rad, 0 at the first)."""
         return angle_from_speed(self.speed, self.sample_rate)
+
+    def evidenced(self) -> float:
+        """The share of the refinement's frames that show the shaft (:func:`shows_the_shaft`); 0 unrefined."""
+        return float(np.mean(shows_the_shaft(self.line_ratio))) if self.line_ratio.size else 0.0
+
+    def longest_unsupported(self) -> float:
+        """The longest stretch (s) between frames that show the shaft, the first and last frames' centres
+        counting as ends; inf when none does."""
+        shown = self.evidence_times[shows_the_shaft(self.line_ratio)] if self.line_ratio.size else []
+        if len(shown) == 0:
+            return math.inf
+        return float(np.max(np.diff(np.r_[self.evidence_times[0], shown, self.evidence_times[-1]])))
+
+    def unsupported(self) -> str | None:
+        """Why the track must not be used (one line), or None when no stretch longer than one frame lies
+        between frames that show the shaft (module docstring)."""
+        gap = self.longest_unsupported()
+        if gap <= self.evidence_frame:
+            return None
+        shown = ("none of the tracker's" if math.isinf(gap) else
+                 f"{100 * self.evidenced():.0f} % of the tracker's")
+        where = "" if math.isinf(gap) else f", none over {gap:.1f} s of the record"
+        return (f"no shaft comb to track the speed on: {shown} {self.evidence_frame:.1f} s frames show one (lines at "
+                f"shaft orders without a common factor, each over {LINE_EVIDENCE:.1f}x its floor){where}; measure "
+                "the speed (a tachometer or a speed channel)")
+
+
+def shows_the_shaft(line_ratio: np.ndarray, level: float | None = None) -> np.ndarray:
+    """Per frame (row of ``line_ratio``, orders 1..K): whether the orders whose line exceeds ``level`` (default
+    :data:`LINE_EVIDENCE`) have no common factor (1 alone will do). A line family at m× the track (m ≥ 2: an
+    outer-race comb at 3.58× the shaft taken at 0.90× it, m = 4) puts lines only at multiples of m; noise
+    rarely exceeds the level (module docstring)."""
+    k = np.arange(1, line_ratio.shape[1] + 1)
+    lines = np.where(line_ratio > (LINE_EVIDENCE if level is None else level), k, 0)
+    return np.gcd.reduce(lines, axis=1) == 1
 
 
 def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonics: int = 8,
@@ -185,19 +254,21 @@ def track_speed(x, sample_rate: float, rpm_lo: float, rpm_hi: float, *, harmonic
     starts = _frame_starts(x.size, n_frame, n_hop)
     f_lo, f_hi = rpm_lo / 60.0, rpm_hi / 60.0
     df = fs / n_frame
-    score = _line_score(_frame_power(x, starts, n_frame), int((harmonics + 1) * f_hi / df) + 3, int(f_lo / df))
+    score = _line_score(_line_ratio(_frame_power(x, starts, n_frame), int((harmonics + 1) * f_hi / df) + 3,
+                                    int(f_lo / df)))
     score = ndimage.maximum_filter1d(score, 3, axis=1)  # lines smear while the speed changes: ±1 bin
     grid = f_lo * np.exp(np.arange(int(math.log(f_hi / f_lo) / _GRID_STEP) + 1) * _GRID_STEP)
     path = _best_path(_comb(score, grid / df, harmonics), max(1, int(math.ceil(max_rate * hop / _GRID_STEP))))
     t = np.arange(x.size) / fs
     speed = 2.0 * math.pi * np.interp(t, (starts + 0.5 * n_frame) / fs, grid[path])
     bounds = (2.0 * math.pi * f_lo, 2.0 * math.pi * f_hi)
+    track = SpeedTrack(speed, fs)
     for round_ in range(max(0, int(refine))):
         span = _SCALE_RANGES[min(round_, len(_SCALE_RANGES) - 1)]
         if span is None:  # the whole told range about the track
-            span = max(bounds[1] / float(speed.min()), float(speed.max()) / bounds[0]) - 1.0
-        speed = _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear)
-    return SpeedTrack(speed, fs)
+            span = max(bounds[1] / float(track.speed.min()), float(track.speed.max()) / bounds[0]) - 1.0
+        track = SpeedTrack(*_refine(x, fs, track.speed, harmonics, max_rate, span, bounds, linear))
+    return track
 
 
 #: Relative spacing of the candidate speeds of the coarse comb search.
@@ -224,11 +295,16 @@ def _frame_power(x: np.ndarray, starts: np.ndarray, n: int, pad: int = 1) -> np.
                               axis=1)) ** 2
 
 
-def _line_score(power: np.ndarray, n_bins: int, median_bins: int) -> np.ndarray:
-    """log(max(P / (LINE_LEVEL · running median of P), 1)) of the first ``n_bins`` bins of each frame."""
+def _line_ratio(power: np.ndarray, n_bins: int, median_bins: int) -> np.ndarray:
+    """P / running median of P (over ``median_bins``, at least 9) of the first ``n_bins`` bins of each frame."""
     power = power[:, :min(power.shape[1], n_bins)]
     background = ndimage.median_filter(power, size=(1, max(9, median_bins) | 1), mode="nearest")
-    return np.log(np.maximum(power / (LINE_LEVEL * np.maximum(background, 1e-300)), 1.0))
+    return power / np.maximum(background, 1e-300)
+
+
+def _line_score(ratio: np.ndarray) -> np.ndarray:
+    """log(max(ratio / LINE_LEVEL, 1)): only lines count."""
+    return np.log(np.maximum(ratio / LINE_LEVEL, 1.0))
 
 
 def _comb(score: np.ndarray, rates: np.ndarray, harmonics: int) -> np.ndarray:
@@ -258,7 +334,8 @@ def _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear):
     """One refinement round (module docstring): the correction c within ±``span`` that puts the most
     line power at orders k·c in the angle-domain frames, the corrected speed kept within ``bounds``
     (rad/s); the new track is c times the frames' mean speeds, linear between them (``linear``), or
-    the per-sample speed times c interpolated."""
+    the per-sample speed times c interpolated. Returns :class:`SpeedTrack`'s fields: the new track, ``fs``,
+    the frames' centres and length (s) and the chosen comb's lines over their floor (frames, K)."""
     a = resample_to_angle(x, fs, angle_from_speed(speed, fs), TRACK_SAMPLES_PER_REV)
     rev_s = 2.0 * math.pi / float(np.mean(speed))
     revs = min(max(_REFINE_REVS, int(round(_REFINE_FRAME / rev_s))), a.samples.size // TRACK_SAMPLES_PER_REV)
@@ -268,7 +345,8 @@ def _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear):
     d_order = TRACK_SAMPLES_PER_REV / (_REFINE_PAD * n_frame)  # orders per bin
     power = _frame_power(a.samples, starts, n_frame, _REFINE_PAD)
     scales = 1.0 + np.arange(-min(span, 0.9), span + 0.5 * _SCALE_STEP, _SCALE_STEP)
-    score = _line_score(power, int((harmonics * scales[-1] + 1.5) / d_order), int(1.0 / d_order))
+    ratio = _line_ratio(power, int((harmonics * scales[-1] + 1.5) / d_order), int(1.0 / d_order))
+    score = _line_score(ratio)
     # c = truth / track changes at most as fast as both together: 2·max_rate
     reach = max(1, int(math.ceil(2.0 * max_rate * hop / TRACK_SAMPLES_PER_REV * rev_s / _SCALE_STEP)))
     t0, t1 = a.times[starts], a.times[starts + n_frame - 1]
@@ -278,9 +356,17 @@ def _refine(x, fs, speed, harmonics, max_rate, span, bounds, linear):
                     -np.inf)
     c = scales[_best_path(comb, reach)]
     t, knots, frame_s = np.arange(x.size) / fs, 0.5 * (t0 + t1), float(np.median(t1 - t0))
+    lines = _comb_line(ratio, c / d_order, harmonics)
     if linear:
-        return _piecewise_linear(t, knots, c * mean_speed, frame_s)
-    return speed * _piecewise_linear(t, knots, c, frame_s)
+        return _piecewise_linear(t, knots, c * mean_speed, frame_s), fs, knots, frame_s, lines
+    return speed * _piecewise_linear(t, knots, c, frame_s), fs, knots, frame_s, lines
+
+
+def _comb_line(ratio: np.ndarray, rates: np.ndarray, harmonics: int) -> np.ndarray:
+    """(frames, K): per frame (row of ``ratio``) the largest ratio within ±1 bin of k·rate (bins), k = 1..K."""
+    pos = np.rint(np.arange(1, harmonics + 1)[None, :] * rates[:, None]).astype(int)  # (frames, K)
+    near = np.clip(pos[:, :, None] + np.arange(-1, 2), 0, ratio.shape[1] - 1)  # (frames, K, 3)
+    return np.take_along_axis(ratio, near.reshape(ratio.shape[0], -1), axis=1).reshape(near.shape).max(axis=2)
 
 
 def _piecewise_linear(t: np.ndarray, knots: np.ndarray, values: np.ndarray, span: float) -> np.ndarray:

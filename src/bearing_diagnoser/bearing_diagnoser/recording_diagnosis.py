@@ -14,7 +14,10 @@ A recording whose measured speed changes (:attr:`~bearing_recordings.recording.R
 a ``shaft_speed`` series, a speed or tachometer channel) is decided in the shaft-angle domain
 (:mod:`.spectral.angle_domain`), its speed told to the observers chunk by chunk; without a
 measured speed, ``track_speed`` (a speed range) takes it from the vibration
-(:func:`.order_tracking.track_speed`, offline: the whole record first).
+(:func:`.order_tracking.track_speed`, offline: the whole record first). A tracked speed without
+evidence (too few of the tracker's frames show a shaft line above what noise gives,
+:meth:`.order_tracking.SpeedTrack.unsupported`) is not decided on: the record is one window not
+diagnosed (kind ``speed``, the tracker's reason), one UNKNOWN segment.
 
 What the run assumed (model set, resampling, speed) is logged (``logging``, logger
 ``bearing_diagnoser.recording_diagnosis``); ``bearing-diagnose`` prints it on stderr.
@@ -30,10 +33,12 @@ import numpy as np
 
 from bearing_common.bearings import CATALOG, DEFAULT_BEARING, Bearing
 from bearing_common.chunk_stream import MAX_CHUNK_SAMPLES
+from bearing_common.states import FaultState
 from bearing_recordings.recording import MEASURED_RPM_TOLERANCE, SPEED_VARIATION, InputError, Recording
 from bearing_recordings.resampling import resample
 
 from .decision.config import DiagnoserConfig
+from .decision.not_diagnosed import SPEED, NotDiagnosed
 from .decision.segments import Segment, segments_from_decisions
 from .decision.state_tracker import Decision
 from .diagnoser import STREAMS
@@ -189,7 +194,8 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         For a recording without a measured speed whose speed changes within lo-hi rev/min (narrower
         than an octave) by at most ``rate`` (relative change per second): the speed per sample tracked
         from the vibration
-        (:func:`.order_tracking.track_speed`, its accuracy there), then decided as a measured one.
+        (:func:`.order_tracking.track_speed`, its accuracy there), then decided as a measured one; a
+        track without evidence is not: the whole record is then not diagnosed (module docstring).
 
     Raises InputError (one line) only when the recording cannot be analysed at all, whatever its
     signal holds: an unknown method or model set, a sample rate too low for the bearing's fault
@@ -205,7 +211,7 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
     LOG.info("model set %s%s; bearing %s", ms, "" if model_set else " (chosen from the input)", bearing.name)
     fs = chosen.sample_rate or rec.sample_rate
     cfg = _decision_config(config or config_for(ms), method, fs, rec.sample_rate)
-    series, tracked_rpm = _changing_speed(rec, fs, track_speed)
+    series, tracked_rpm, refused = _changing_speed(rec, fs, track_speed)
     speed = rpm or tracked_rpm or (float(np.mean(series)) * 30.0 / np.pi if series is not None else _speed(rec, rpm))
     if isinstance(baseline, Recording):
         baseline = learn_recording_reference(baseline, model_set, rpm, bearing, rpm_tolerance, config)
@@ -217,6 +223,8 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
         cfg.front_end.check_recording(min(fs, rec.sample_rate), bearing, speed, rec.duration, cfg.usable_bandwidth)
     except ValueError as exc:
         raise InputError(str(exc)) from None
+    if refused is not None:
+        return _not_diagnosed(rec, ms, fs, method, bearing, refused)
     LOG.info("machine reference: %s", baseline.describe() if baseline is not None else "none (the blind decision)")
     x, truth = _at_rate(rec, fs, ms)
     observed = method == "model"
@@ -236,26 +244,43 @@ def diagnose_recording(rec: Recording, model_set: str | None = None, method: str
 
 
 def _changing_speed(rec: Recording, fs: float, track: tuple[float, float, float] | None
-                    ) -> tuple[np.ndarray | None, float | None]:
+                    ) -> tuple[np.ndarray | None, float | None, NotDiagnosed | None]:
     """(the recording's speed per sample at ``fs`` Hz (rad/s) when it changes (measured, or tracked as
     ``track`` = (lo, hi rev/min, largest change 1/s) says when none is measured), None when it holds one
-    speed; the tracked mean speed (rev/min), None when none was tracked)."""
+    speed; the tracked mean speed (rev/min), None when none was tracked; why the tracked speed must not be
+    used, None when it may or none was tracked)."""
     w, tracked = rec.shaft_speed, None
     if w is None and track is not None:
         from .order_tracking import track_speed
         lo, hi, rate = track
-        w = track_speed(rec.accel, rec.sample_rate, lo, hi, max_rate=rate).speed
+        found = track_speed(rec.accel, rec.sample_rate, lo, hi, max_rate=rate)
+        w = found.speed
         spread, tracked = float((w.max() - w.min()) / w.mean()), float(np.mean(w)) * 30.0 / np.pi
         LOG.info("shaft speed tracked from the vibration within %g-%g rpm, changing by at most %g %%/s: %.0f to "
-                 "%.0f rpm", lo, hi, 100.0 * rate, w.min() * 30.0 / np.pi, w.max() * 30.0 / np.pi)
+                 "%.0f rpm, %.0f %% of its frames with a shaft line", lo, hi, 100.0 * rate, w.min() * 30.0 / np.pi,
+                 w.max() * 30.0 / np.pi, 100.0 * found.evidenced())
+        why = found.unsupported()
+        if why is not None:
+            LOG.warning("the tracked shaft speed is not used: %s", why)
+            return None, tracked, NotDiagnosed(SPEED, why)
     else:
         spread = rec.speed_spread
     if w is None or spread <= SPEED_VARIATION:
-        return None, tracked
+        return None, tracked, None
     LOG.info("the shaft speed changes by %.1f %% of its mean: decided in the shaft-angle domain", 100 * spread)
     if abs(rec.sample_rate - fs) > 1e-9 * fs:
         w = np.interp(np.arange(int(round(w.size * fs / rec.sample_rate))) / fs, np.arange(w.size) / rec.sample_rate, w)
-    return w, tracked
+    return w, tracked, None
+
+
+def _not_diagnosed(rec: Recording, model_set: str, fs: float, method: str, bearing: Bearing,
+                   why: NotDiagnosed) -> OfflineResult:
+    """The result of a recording not decided at all, for ``why``: one window, the whole record, not diagnosed."""
+    end = rec.duration
+    window = Decision(end, 0.0, end, FaultState.UNKNOWN, FaultState.UNKNOWN, 0.0, 0.0, False, not_diagnosed=why)
+    x, truth = _at_rate(rec, fs, model_set)
+    return OfflineResult(segments_from_decisions([window], end, model_set), [window], model_set, fs, None, x, truth,
+                         method=method, not_diagnosed=[(0.0, end, why)], bearing=bearing)
 
 
 def diagnose_measurement(y: np.ndarray, fs: float, rpm: float | None, model_set: str = "sim_48k",

@@ -6,7 +6,8 @@ reason of one kind:
 * ``sensor`` — the sensor signal is unfit: dead, clipped, quantised, non-finite
   (:mod:`.sensor_health`);
 * ``speed`` — the shaft speed is not known well enough to tell the parts' combs apart
-  (a nameplate speed the vibration has not confirmed);
+  (a nameplate speed the vibration has not confirmed; a speed tracked from the vibration that
+  no shaft comb carries, :meth:`..order_tracking.SpeedTrack.unsupported`);
 * ``resolution`` — the window (a short snapshot) is too short to resolve any hypothesis' lines.
 
 The front end names it (:class:`.front_end.WindowVerdict`), the core passes it on
