@@ -103,7 +103,6 @@ COARSE_MIN_REVS = 12
 LINE_EVIDENCE = math.log2(3.0 / 1e-3)
 
 
-
 @dataclass
 class AngleSignal:
     """A signal sampled at equal increments of shaft angle.
