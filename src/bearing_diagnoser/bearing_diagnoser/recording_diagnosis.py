@@ -15,8 +15,8 @@ a ``shaft_speed`` series, a speed or tachometer channel) is decided in the shaft
 (:mod:`.spectral.angle_domain`), its speed told to the observers chunk by chunk; without a
 measured speed, ``track_speed`` (a speed range) takes it from the vibration
 (:func:`.order_tracking.track_speed`, offline: the whole record first). A tracked speed without
-evidence (too few of the tracker's frames show a shaft line above what noise gives,
-:meth:`.order_tracking.SpeedTrack.unsupported`) is not decided on: the record is one window not
+evidence (a stretch longer than one of the tracker's frames between frames that show a shaft line
+above what noise gives, :meth:`.order_tracking.SpeedTrack.unsupported`) is not decided on: the record is one window not
 diagnosed (kind ``speed``, the tracker's reason), one UNKNOWN segment.
 
 What the run assumed (model set, resampling, speed) is logged (``logging``, logger
